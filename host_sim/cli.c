@@ -1,0 +1,152 @@
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void cli_init(cli_args *a, int argc, char **argv)
+{
+    a->argc = argc;
+    a->argv = argv;
+    memset(a->used, 0, sizeof a->used);
+}
+
+static int find(cli_args *a, const char *name)
+{
+    for (int i = 0; i < a->argc && i < 256; i++) {
+        const char *s = a->argv[i];
+        if (s[0] == '-' && s[1] == '-' && strcmp(s + 2, name) == 0)
+            return i;
+    }
+    return -1;
+}
+
+const char *cli_opt(cli_args *a, const char *name)
+{
+    int i = find(a, name);
+    if (i < 0)
+        return NULL;
+    a->used[i] = 1;
+    if (i + 1 >= a->argc) {
+        fprintf(stderr, "error: option --%s needs a value\n", name);
+        return "";
+    }
+    a->used[i + 1] = 1;
+    return a->argv[i + 1];
+}
+
+bool cli_flag(cli_args *a, const char *name)
+{
+    int i = find(a, name);
+    if (i < 0)
+        return false;
+    a->used[i] = 1;
+    return true;
+}
+
+int cli_parse_number(const char *s, double *out)
+{
+    if (s == NULL || *s == '\0')
+        return -1;
+    errno = 0;
+    char *end = NULL;
+    double v = strtod(s, &end);
+    if (end == s || *end != '\0')
+        return -1;
+    if (errno == ERANGE && isfinite(v) && v != 0.0)
+        return -1;
+    *out = v; /* ERANGE overflow gives +/-HUGE_VAL (inf): left to the firmware to reject */
+    return 0;
+}
+
+int cli_num(cli_args *a, const char *name, double *out)
+{
+    const char *s = cli_opt(a, name);
+    if (s == NULL)
+        return 1;
+    if (cli_parse_number(s, out) != 0) {
+        fprintf(stderr, "error: --%s: '%s' is not a number\n", name, s);
+        return -1;
+    }
+    return 0;
+}
+
+int cli_num_req(cli_args *a, const char *name, double *out)
+{
+    int r = cli_num(a, name, out);
+    if (r == 1) {
+        fprintf(stderr, "error: missing required option --%s\n", name);
+        return -1;
+    }
+    return r;
+}
+
+int cli_num_list(cli_args *a, const char *name, double *out, int max)
+{
+    const char *s = cli_opt(a, name);
+    if (s == NULL)
+        return 0;
+    char buf[1024];
+    size_t len = strlen(s);
+    if (len == 0 || len >= sizeof buf) {
+        fprintf(stderr, "error: --%s: bad list\n", name);
+        return -1;
+    }
+    memcpy(buf, s, len + 1);
+    int n = 0;
+    char *p = buf;
+    for (;;) {
+        char *comma = strchr(p, ',');
+        if (comma)
+            *comma = '\0';
+        if (n >= max) {
+            fprintf(stderr, "error: --%s: at most %d values\n", name, max);
+            return -1;
+        }
+        if (cli_parse_number(p, &out[n]) != 0) {
+            fprintf(stderr, "error: --%s: '%s' is not a number\n", name, p);
+            return -1;
+        }
+        n++;
+        if (!comma)
+            break;
+        p = comma + 1;
+    }
+    return n;
+}
+
+const char *cli_positional(cli_args *a, int k)
+{
+    /* call after every option was read: what is left unused and not "--x" is positional */
+    for (int i = 0; i < a->argc && i < 256; i++) {
+        const char *s = a->argv[i];
+        if (a->used[i] || (s[0] == '-' && s[1] == '-'))
+            continue;
+        if (k-- == 0) {
+            a->used[i] = 1;
+            return s;
+        }
+    }
+    return NULL;
+}
+
+int cli_check_unused(cli_args *a, const char *cmd)
+{
+    int bad = 0;
+    for (int i = 0; i < a->argc && i < 256; i++) {
+        if (!a->used[i]) {
+            fprintf(stderr, "error: %s: unknown or unexpected argument '%s'\n", cmd, a->argv[i]);
+            bad = 1;
+        }
+    }
+    return bad ? -1 : 0;
+}
+
+void json_num(FILE *f, double x)
+{
+    if (!isfinite(x))
+        fputs("null", f);
+    else
+        fprintf(f, "%.17g", x);
+}

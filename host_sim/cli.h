@@ -1,0 +1,43 @@
+/*
+ * cli.h: small helpers shared by the lissom-sim subcommands (host only; may use stdio).
+ *
+ * Options are GNU-style `--name value` pairs or bare flags (`--json`). Numbers are parsed strictly:
+ * the whole token must be a number (strtod), otherwise the command fails with a message on stderr.
+ * NaN and inf are passed through to the firmware so that its own validation reports them.
+ */
+#ifndef LSM_SIM_CLI_H
+#define LSM_SIM_CLI_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+typedef struct cli_args {
+    int argc;
+    char **argv;
+    unsigned char used[256]; /* which argv entries were consumed (for unknown-option errors) */
+} cli_args;
+
+void cli_init(cli_args *a, int argc, char **argv);
+/* Value of --name, or NULL if absent. Marks the option and its value as used. */
+const char *cli_opt(cli_args *a, const char *name);
+/* true if the bare flag --name is present. */
+bool cli_flag(cli_args *a, const char *name);
+/* Parse --name as a number. Returns 0 ok, 1 absent (out left untouched), -1 malformed (message printed). */
+int cli_num(cli_args *a, const char *name, double *out);
+/* Like cli_num but the option is required (-1 with a message when absent). */
+int cli_num_req(cli_args *a, const char *name, double *out);
+/* Parse a comma-separated list of numbers. Returns the count (>= 1), 0 if absent, -1 malformed. */
+int cli_num_list(cli_args *a, const char *name, double *out, int max);
+/* Positional argument k (0-based): call after all options were read; it is the k-th argument
+ * left unused that does not start with "--". */
+const char *cli_positional(cli_args *a, int k);
+/* Reports any argument that was not consumed; returns -1 if there is one, else 0. */
+int cli_check_unused(cli_args *a, const char *cmd);
+/* Strict number parse of a token (whole token, allows nan/inf spellings). */
+int cli_parse_number(const char *s, double *out);
+
+/* JSON output helpers: numbers are printed with 17 significant digits (round-trip exact in double);
+ * NaN and inf (never expected) are printed as null. */
+void json_num(FILE *f, double x);
+
+#endif

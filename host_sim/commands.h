@@ -1,0 +1,8 @@
+/* commands.h: one entry point per lissom-sim subcommand (argv[0] is the first argument after it). */
+#ifndef LSM_SIM_COMMANDS_H
+#define LSM_SIM_COMMANDS_H
+
+int cmd_version(int argc, char **argv);
+/* further subcommands declare here, one line each */
+
+#endif

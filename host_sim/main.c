@@ -1,0 +1,48 @@
+/*
+ * lissom-sim: the host simulator's command-line front end.
+ *
+ * Each subcommand lives in its own file (cmd_<name>.c) and is listed in the table below.
+ * Contract for every subcommand: on success it prints its result (JSON with --json) on stdout and
+ * returns 0; on bad input it prints a message on stderr and returns non-zero.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "commands.h"
+
+typedef struct {
+    const char *name;
+    int (*run)(int argc, char **argv); /* argv[0] is the first argument after the subcommand */
+    const char *help;
+} subcommand;
+
+static const subcommand k_commands[] = {
+    {"version", cmd_version, "print the version"},
+    /* further subcommands register here, one line each */
+};
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: lissom-sim <command> [options]\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof k_commands / sizeof k_commands[0]; i++)
+        fprintf(f, "  %-10s %s\n", k_commands[i].name, k_commands[i].help);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return 2;
+    }
+    if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
+        usage(stdout);
+        return 0;
+    }
+    for (size_t i = 0; i < sizeof k_commands / sizeof k_commands[0]; i++) {
+        if (strcmp(argv[1], k_commands[i].name) == 0)
+            return k_commands[i].run(argc - 2, argv + 2);
+    }
+    fprintf(stderr, "error: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return 2;
+}

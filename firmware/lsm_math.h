@@ -1,0 +1,50 @@
+/*
+ * lsm_math.h: the math functions of the core, bound to the real type chosen in lsm_config.h
+ * (sqrt/cbrt/floor/ceil/sin/cos in double, their -f variants in float), and input checks.
+ * Header-only: a few macros and static inline helpers, no state.
+ */
+#ifndef LSM_MATH_H
+#define LSM_MATH_H
+
+#include <math.h>
+
+#include "lsm_config.h"
+
+#if LSM_REAL_IS_FLOAT
+#define lsm_sqrt sqrtf
+#define lsm_cbrt cbrtf
+#define lsm_floor floorf
+#define lsm_ceil ceilf
+#define lsm_sin sinf
+#define lsm_cos cosf
+#define lsm_fabs fabsf
+#define lsm_atan2 atan2f
+#define LSM_REAL_EPS 1.1920929e-7f
+#define LSM_REAL_MAX 3.4028235e38f
+#else
+#define lsm_sqrt sqrt
+#define lsm_cbrt cbrt
+#define lsm_floor floor
+#define lsm_ceil ceil
+#define lsm_sin sin
+#define lsm_cos cos
+#define lsm_fabs fabs
+#define lsm_atan2 atan2
+#define LSM_REAL_EPS 2.220446049250313e-16
+#define LSM_REAL_MAX 1.7976931348623157e308
+#endif
+
+/* 0 if x is finite, else LSM_E_NAN / LSM_E_INF (as int, to keep this header free of status.h). */
+static inline int lsm_check_finite(lsm_real x)
+{
+    if (x != x)
+        return -2; /* LSM_E_NAN */
+    if (x > LSM_REAL_MAX || x < -LSM_REAL_MAX)
+        return -3; /* LSM_E_INF */
+    return 0;
+}
+
+static inline lsm_real lsm_min2(lsm_real a, lsm_real b) { return a < b ? a : b; }
+static inline lsm_real lsm_max2(lsm_real a, lsm_real b) { return a > b ? a : b; }
+
+#endif /* LSM_MATH_H */

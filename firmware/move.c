@@ -1,0 +1,447 @@
+#include "move.h"
+
+#include "lsm_math.h"
+
+/* Largest |distance| accepted on one axis (mm); beyond it positions lose meaning in float. */
+#ifndef LSM_MAX_DISTANCE_MM
+#define LSM_MAX_DISTANCE_MM 1.0e7 /* mm (10 km) */
+#endif
+/* Largest number of cycles in one move (fits the 32-bit cycle counters with margin). */
+#define LSM_MOVE_MAX_CYCLES 0x40000000u
+#define FIT_MAX_ITER 64
+#if LSM_REAL_IS_FLOAT
+#define BISECT_ITER 40
+#else
+#define BISECT_ITER 64
+#endif
+
+typedef struct shape {
+    lsm_scurve_intervals acc, dec;
+    uint32_t nc;
+} shape;
+
+static lsm_scurve_limits ramp_limits(const lsm_axis_limits *L)
+{
+    lsm_scurve_limits s = {L->a_max_mm_s2, L->j_max_mm_s3, L->snap_max_mm_s4};
+    return s;
+}
+
+static bool ramp(const lsm_axis_limits *L, lsm_real dt, lsm_real dv, lsm_scurve_rule rule, lsm_scurve_intervals *iv)
+{
+    const lsm_scurve_limits sl = ramp_limits(L);
+    return lsm_scurve_rule_intervals(&sl, dt, lsm_fabs(dv), rule, iv);
+}
+
+static bool ramp_fits(const lsm_axis_limits *L, lsm_real dt, const lsm_scurve_intervals *iv, lsm_real dv,
+                      lsm_scurve_rule rule)
+{
+    if (rule == LSM_SCURVE_RULE_PAPER) /* the paper's rounding does not promise the limits */
+        return dv == 0 || iv->n1_cycles > 0;
+    const lsm_scurve_limits sl = ramp_limits(L);
+    return lsm_scurve_fits(&sl, dt, iv, dv);
+}
+
+/* Distance of the two quantised ramps v0 -> vp -> v1 (mm), or -1 on overflow. */
+static lsm_real ramps_distance(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real vp, lsm_real v1,
+                               lsm_scurve_rule rule)
+{
+    lsm_scurve_intervals a, d;
+    if (!ramp(L, dt, vp - v0, rule, &a) || !ramp(L, dt, vp - v1, rule, &d))
+        return -1;
+    return ((v0 + vp) * (lsm_real)lsm_scurve_total_cycles(&a) + (vp + v1) * (lsm_real)lsm_scurve_total_cycles(&d)) *
+           dt / 2;
+}
+
+static lsm_scurve_intervals iv_max(const lsm_scurve_intervals *a, const lsm_scurve_intervals *b)
+{
+    lsm_scurve_intervals r;
+    r.n1_cycles = a->n1_cycles > b->n1_cycles ? a->n1_cycles : b->n1_cycles;
+    r.n2_cycles = a->n2_cycles > b->n2_cycles ? a->n2_cycles : b->n2_cycles;
+    r.n4_cycles = a->n4_cycles > b->n4_cycles ? a->n4_cycles : b->n4_cycles;
+    return r;
+}
+
+/* The minimal-time shape of one axis alone (before the exact fit). */
+static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1,
+                               lsm_scurve_rule rule, shape *sh)
+{
+    const lsm_real vlo = lsm_max2(v0, v1);
+    const lsm_real d_lo = ramps_distance(L, dt, v0, vlo, v1, rule);
+    if (d_lo < 0)
+        return LSM_E_TOO_LONG;
+    if (d_lo > D)
+        return LSM_E_INFEASIBLE;
+    lsm_real vp = L->v_max_mm_s;
+    const lsm_real d_hi = ramps_distance(L, dt, v0, vp, v1, rule);
+    if (d_hi < 0 || d_hi > D) {
+        lsm_real lo = vlo, hi = vp; /* d(lo) <= D < d(hi); d is non-decreasing in vp */
+        for (int i = 0; i < BISECT_ITER && hi - lo > LSM_REAL_EPS * hi; i++) {
+            const lsm_real mid = (lo + hi) / 2;
+            const lsm_real dm = ramps_distance(L, dt, v0, mid, v1, rule);
+            if (dm >= 0 && dm <= D)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        vp = lo;
+    }
+    if (!ramp(L, dt, vp - v0, rule, &sh->acc) || !ramp(L, dt, vp - v1, rule, &sh->dec))
+        return LSM_E_TOO_LONG;
+    const lsm_real rest = D - ramps_distance(L, dt, v0, vp, v1, rule);
+    lsm_real nc = 0;
+    if (vp > 0 && rest > 0) {
+        nc = lsm_ceil(rest / (vp * dt));
+        if (!(nc < (lsm_real)LSM_MOVE_MAX_CYCLES))
+            return LSM_E_TOO_LONG;
+    }
+    sh->nc = (uint32_t)nc;
+    return LSM_OK;
+}
+
+static bool axis_still(const lsm_move_request *req, unsigned i)
+{
+    return req->distance_mm[i] == 0;
+}
+
+/*
+ * Solves every axis's cruise feed for the shared shape (eq (1) of move.h) and widens the shape until every
+ * axis fits its limits. When a ramp must widen, the cruise is shortened so that the reference axis (the
+ * slowest) keeps its current cruise feed: the move does not get slower than it must. Fills mv on success.
+ */
+static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_move *mv)
+{
+    const lsm_real dt = req->cycle_s;
+    for (int iter = 0; iter < FIT_MAX_ITER; iter++) {
+        const lsm_real ta = (lsm_real)lsm_scurve_total_cycles(&sh->acc) * dt;
+        const lsm_real td = (lsm_real)lsm_scurve_total_cycles(&sh->dec) * dt;
+        const lsm_real tc = (lsm_real)sh->nc * dt;
+        const uint64_t total = (uint64_t)lsm_scurve_total_cycles(&sh->acc) + lsm_scurve_total_cycles(&sh->dec) + sh->nc;
+        if (total >= LSM_MOVE_MAX_CYCLES)
+            return LSM_E_TOO_LONG;
+        const lsm_real denom = ta / 2 + tc + td / 2;
+        if (!(denom > 0)) {
+            sh->nc = 1; /* a move needs at least one cycle */
+            continue;
+        }
+        const lsm_real vc_ref =
+            (lsm_fabs(req->distance_mm[ref]) - req->v0_mm_s[ref] * ta / 2 - req->v1_mm_s[ref] * td / 2) / denom;
+        bool ok = true, widened = false;
+        for (unsigned i = 0; i < req->n_axes && ok; i++) {
+            if (axis_still(req, i))
+                continue;
+            const lsm_axis_limits *L = &req->lim[i];
+            const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
+            const lsm_real num = lsm_fabs(req->distance_mm[i]) - v0 * ta / 2 - v1 * td / 2;
+            const lsm_real vc = num / denom;
+            if (!(vc > 0))
+                return LSM_E_INFEASIBLE; /* the ramps alone reach or overrun the distance */
+            if (vc > L->v_max_mm_s) {
+                const lsm_real need = lsm_ceil((num / L->v_max_mm_s - ta / 2 - td / 2) / dt);
+                if (!(need < (lsm_real)LSM_MOVE_MAX_CYCLES))
+                    return LSM_E_TOO_LONG;
+                sh->nc = (uint32_t)need > sh->nc ? (uint32_t)need : sh->nc + 1;
+                ok = false;
+                break;
+            }
+            lsm_scurve_intervals iv;
+            if (!ramp_fits(L, dt, &sh->acc, vc - v0, req->rule)) {
+                if (!ramp(L, dt, vc - v0, req->rule, &iv))
+                    return LSM_E_TOO_LONG;
+                sh->acc = iv_max(&sh->acc, &iv);
+                ok = false;
+                widened = true;
+            }
+            if (!ramp_fits(L, dt, &sh->dec, vc - v1, req->rule)) {
+                if (!ramp(L, dt, vc - v1, req->rule, &iv))
+                    return LSM_E_TOO_LONG;
+                sh->dec = iv_max(&sh->dec, &iv);
+                ok = false;
+                widened = true;
+            }
+        }
+        if (widened) {
+            /* shorten the cruise so that the reference axis keeps vc_ref (never below 0 cycles) */
+            const lsm_real ta2 = (lsm_real)lsm_scurve_total_cycles(&sh->acc) * dt;
+            const lsm_real td2 = (lsm_real)lsm_scurve_total_cycles(&sh->dec) * dt;
+            const lsm_real num_ref =
+                lsm_fabs(req->distance_mm[ref]) - req->v0_mm_s[ref] * ta2 / 2 - req->v1_mm_s[ref] * td2 / 2;
+            const lsm_real tc2 = vc_ref > 0 ? num_ref / vc_ref - ta2 / 2 - td2 / 2 : 0;
+            const lsm_real nc2 = tc2 > 0 ? lsm_ceil(tc2 / dt) : 0;
+            if (!(nc2 < (lsm_real)LSM_MOVE_MAX_CYCLES))
+                return LSM_E_TOO_LONG;
+            sh->nc = (uint32_t)nc2;
+        }
+        if (!ok)
+            continue;
+        mv->acc = sh->acc;
+        mv->dec = sh->dec;
+        mv->cruise_cycles = sh->nc;
+        const lsm_real den_a = lsm_scurve_jerk_den(&sh->acc, dt);
+        const lsm_real den_d = lsm_scurve_jerk_den(&sh->dec, dt);
+        for (unsigned i = 0; i < req->n_axes; i++) {
+            lsm_move_axis *ax = &mv->axis[i];
+            const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
+            ax->distance_mm = req->distance_mm[i];
+            ax->dir = req->distance_mm[i] < 0 ? -1 : 1;
+            ax->v0_mm_s = v0;
+            ax->v1_mm_s = v1;
+            if (axis_still(req, i)) {
+                ax->vc_mm_s = ax->jp_acc_mm_s3 = ax->jp_dec_mm_s3 = 0;
+                continue;
+            }
+            const lsm_real vc = (lsm_fabs(req->distance_mm[i]) - v0 * ta / 2 - v1 * td / 2) / denom;
+            ax->vc_mm_s = vc;
+            ax->jp_acc_mm_s3 = den_a > 0 ? (vc - v0) / den_a : 0;
+            ax->jp_dec_mm_s3 = den_d > 0 ? (v1 - vc) / den_d : 0;
+        }
+        return LSM_OK;
+    }
+    return LSM_E_INFEASIBLE;
+}
+
+/*
+ * Fallback for short moves between non-zero feeds: when no whole-cycle profile over v_p >= max(v0, v1) lands
+ * exactly on D within the limits (the slack D - d(v0 -> v1) is too small for a short ramp to absorb: a ramp's
+ * velocity capacity grows with the cube of its length under a snap limit), cruise at a lower feed instead:
+ * between v0 and v1 (the change split in two stages), or below both (a dip). Tries feeds from high to low;
+ * the first that fits wins.
+ */
+#define DIP_STEPS 32
+static lsm_status dip_shape(const lsm_move_request *req, unsigned i, shape *sh, lsm_move *mv)
+{
+    const lsm_axis_limits *L = &req->lim[i];
+    const lsm_real dt = req->cycle_s, D = lsm_fabs(req->distance_mm[i]);
+    const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
+    const lsm_real vtop = lsm_max2(v0, v1);
+    for (int k = 1; k <= DIP_STEPS; k++) {
+        const lsm_real vp = vtop * (lsm_real)(DIP_STEPS - k) / DIP_STEPS;
+        if (!ramp(L, dt, v0 - vp, req->rule, &sh->acc) || !ramp(L, dt, v1 - vp, req->rule, &sh->dec))
+            return LSM_E_TOO_LONG;
+        const lsm_real rest = D - ramps_distance(L, dt, v0, vp, v1, req->rule);
+        if (rest < 0)
+            continue;
+        lsm_real nc = vp > 0 ? lsm_ceil(rest / (vp * dt)) : 0;
+        if (vp == 0 && rest > 0)
+            continue; /* a full stop cannot absorb a remainder */
+        if (!(nc < (lsm_real)LSM_MOVE_MAX_CYCLES))
+            return LSM_E_TOO_LONG;
+        sh->nc = (uint32_t)nc;
+        shape trial = *sh;
+        lsm_status st = fit(req, i, &trial, mv);
+        if (st == LSM_OK) {
+            *sh = trial;
+            return LSM_OK;
+        }
+        if (st != LSM_E_INFEASIBLE)
+            return st;
+    }
+    return LSM_E_INFEASIBLE;
+}
+
+static lsm_status validate(const lsm_move_request *req)
+{
+    if (req->n_axes < 1 || req->n_axes > LSM_MAX_AXES)
+        return LSM_E_ARG;
+    if (req->rule != LSM_SCURVE_RULE_STRICT && req->rule != LSM_SCURVE_RULE_PAPER)
+        return LSM_E_ARG;
+    bool moving = false;
+    for (unsigned i = 0; i < req->n_axes; i++) {
+        const lsm_axis_limits *L = &req->lim[i];
+        const lsm_real vals[6] = {req->distance_mm[i], req->v0_mm_s[i], req->v1_mm_s[i], L->v_max_mm_s,
+                                  L->a_max_mm_s2, L->j_max_mm_s3};
+        for (int k = 0; k < 6; k++) {
+            lsm_status st = (lsm_status)lsm_check_finite(vals[k]);
+            if (st != LSM_OK)
+                return st;
+        }
+        const lsm_scurve_limits sl = ramp_limits(L);
+        lsm_status st = lsm_scurve_check_limits(&sl, req->cycle_s);
+        if (st != LSM_OK)
+            return st;
+        if (!(L->v_max_mm_s > 0))
+            return LSM_E_LIMIT;
+        if (req->v0_mm_s[i] < 0 || req->v1_mm_s[i] < 0)
+            return LSM_E_NEG_FEED;
+        if (req->v0_mm_s[i] > L->v_max_mm_s || req->v1_mm_s[i] > L->v_max_mm_s)
+            return LSM_E_FEED_ABOVE_VMAX;
+        const lsm_real D = lsm_fabs(req->distance_mm[i]);
+        if (D > (lsm_real)LSM_MAX_DISTANCE_MM)
+            return LSM_E_RANGE;
+        if (D / (L->v_max_mm_s * req->cycle_s) >= (lsm_real)LSM_MOVE_MAX_CYCLES)
+            return LSM_E_TOO_LONG;
+        if (D > 0)
+            moving = true;
+        else if (req->v0_mm_s[i] > 0 || req->v1_mm_s[i] > 0)
+            return LSM_E_INFEASIBLE; /* a still axis cannot start or end with a feed */
+    }
+    return moving ? LSM_OK : LSM_E_ZERO_LENGTH;
+}
+
+lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
+{
+    if (mv == NULL || req == NULL)
+        return LSM_E_NULL;
+    lsm_status st = validate(req);
+    if (st != LSM_OK)
+        return st;
+    const lsm_real dt = req->cycle_s;
+    mv->cycle_s = dt;
+    mv->n_axes = req->n_axes;
+
+    /* 1. each axis alone: its minimal-time shape, made exact */
+    uint32_t slowest_cycles = 0;
+    shape shared = {{0, 0, 0}, {0, 0, 0}, 0};
+    mv->slowest_axis = 0;
+    for (unsigned i = 0; i < req->n_axes; i++) {
+        if (axis_still(req, i))
+            continue;
+        shape sh;
+        st = single_shape(&req->lim[i], dt, lsm_fabs(req->distance_mm[i]), req->v0_mm_s[i], req->v1_mm_s[i],
+                          req->rule, &sh);
+        if (st != LSM_OK)
+            return st;
+        lsm_move_request one = *req;
+        for (unsigned k = 0; k < req->n_axes; k++)
+            if (k != i)
+                one.distance_mm[k] = one.v0_mm_s[k] = one.v1_mm_s[k] = 0;
+        st = fit(&one, i, &sh, mv);
+        if (st == LSM_E_INFEASIBLE)
+            st = dip_shape(&one, i, &sh, mv);
+        if (st != LSM_OK)
+            return st;
+        const uint32_t n = lsm_move_total_cycles(mv);
+        if (n > slowest_cycles) {
+            slowest_cycles = n;
+            shared = sh;
+            mv->slowest_axis = (uint8_t)i;
+        }
+    }
+    /* 2. all axes on the slowest axis's intervals, each with its own vc and corrected J_P */
+    return fit(req, mv->slowest_axis, &shared, mv);
+}
+
+uint32_t lsm_move_total_cycles(const lsm_move *mv)
+{
+    return lsm_scurve_total_cycles(&mv->acc) + mv->cruise_cycles + lsm_scurve_total_cycles(&mv->dec);
+}
+
+lsm_real lsm_move_duration_s(const lsm_move *mv)
+{
+    return (lsm_real)lsm_move_total_cycles(mv) * mv->cycle_s;
+}
+
+void lsm_move_phases(const lsm_move *mv, unsigned axis, lsm_phase out[LSM_MOVE_PHASES])
+{
+    const lsm_move_axis *ax = &mv->axis[axis];
+    lsm_scurve_phases(&mv->acc, ax->jp_acc_mm_s3, out);
+    out[7].n_cycles = mv->cruise_cycles;
+    out[7].shape = LSM_PHASE_CONST;
+    out[7].jerk_mm_s3 = 0;
+    lsm_scurve_phases(&mv->dec, ax->jp_dec_mm_s3, out + 8);
+}
+
+/* Cycle index at which phase p starts. */
+static uint32_t phase_start_cycle(const lsm_phase *ph, unsigned p)
+{
+    uint32_t k = 0;
+    for (unsigned i = 0; i < p; i++)
+        k += ph[i].n_cycles;
+    return k;
+}
+
+void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin *out)
+{
+    lsm_phase ph[LSM_MOVE_PHASES];
+    lsm_move_phases(mv, axis, ph);
+    const lsm_move_axis *ax = &mv->axis[axis];
+    const lsm_kin start = {0, ax->v0_mm_s, 0, 0};
+    if (p <= 7) { /* the first ramp and the cruise start: forward from the start */
+        lsm_phases_eval_cycle(ph, p, mv->cycle_s, &start, phase_start_cycle(ph, p), 0, out);
+        if (p == 7 && mv->cruise_cycles > 0) {
+            /* the cruise joins the two ramps exactly: its feed is (start of ramp 2 - end of ramp 1) / tc */
+            lsm_kin s8;
+            lsm_move_phase_start(mv, axis, 8, &s8);
+            out->v_mm_s = (s8.s_mm - out->s_mm) / ((lsm_real)mv->cruise_cycles * mv->cycle_s);
+            out->a_mm_s2 = 0;
+            out->j_mm_s3 = 0;
+        }
+        return;
+    }
+    /* the second ramp: backward from the exact end state. Reversed in time, the ramp vc -> v1 is the standard
+     * ramp v1 -> vc with jerk amplitude -jp_dec; its distance from the end is the reversed ramp's travel. */
+    lsm_phase rev[7];
+    lsm_scurve_phases(&mv->dec, -ax->jp_dec_mm_s3, rev);
+    const lsm_kin end = {0, ax->v1_mm_s, 0, 0};
+    uint32_t sigma = 0; /* cycles from the start of phase p to the end of the move */
+    for (unsigned i = p; i < LSM_MOVE_PHASES; i++)
+        sigma += ph[i].n_cycles;
+    lsm_kin r;
+    lsm_phases_eval_cycle(rev, 7, mv->cycle_s, &end, sigma, 0, &r);
+    out->s_mm = lsm_fabs(ax->distance_mm) - r.s_mm;
+    out->v_mm_s = r.v_mm_s;
+    out->a_mm_s2 = -r.a_mm_s2;
+    out->j_mm_s3 = r.j_mm_s3;
+}
+
+/* Closed form in the travel frame: locate the phase, then advance from its start state; no terminal snapping. */
+static void eval_travel(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real frac, lsm_kin *out)
+{
+    lsm_phase ph[LSM_MOVE_PHASES];
+    lsm_move_phases(mv, axis, ph);
+    uint32_t m = k;
+    unsigned p = 0;
+    for (; p < LSM_MOVE_PHASES; p++) {
+        if (ph[p].n_cycles == 0)
+            continue;
+        if (m < ph[p].n_cycles || (m == ph[p].n_cycles && frac == 0))
+            break;
+        m -= ph[p].n_cycles;
+    }
+    if (p == LSM_MOVE_PHASES) { /* past the end */
+        lsm_kin e;
+        lsm_move_phase_start(mv, axis, LSM_MOVE_PHASES - 1, &e);
+        lsm_phase_advance(&ph[LSM_MOVE_PHASES - 1], mv->cycle_s, &e, (lsm_real)ph[LSM_MOVE_PHASES - 1].n_cycles * mv->cycle_s, out);
+        out->s_mm += out->v_mm_s * ((lsm_real)m + frac) * mv->cycle_s;
+        out->j_mm_s3 = 0;
+        return;
+    }
+    lsm_kin st;
+    lsm_move_phase_start(mv, axis, p, &st);
+    lsm_phase_advance(&ph[p], mv->cycle_s, &st, ((lsm_real)m + frac) * mv->cycle_s, out);
+}
+
+void lsm_move_eval_cycle(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real frac, lsm_kin *out)
+{
+    const lsm_move_axis *ax = &mv->axis[axis];
+    if (k >= lsm_move_total_cycles(mv)) {
+        out->s_mm = ax->distance_mm;
+        out->v_mm_s = ax->dir * ax->v1_mm_s;
+        out->a_mm_s2 = 0;
+        out->j_mm_s3 = 0;
+        return;
+    }
+    eval_travel(mv, axis, k, frac, out);
+    out->s_mm *= ax->dir;
+    out->v_mm_s *= ax->dir;
+    out->a_mm_s2 *= ax->dir;
+    out->j_mm_s3 *= ax->dir;
+}
+
+void lsm_move_eval(const lsm_move *mv, unsigned axis, lsm_real t_s, lsm_kin *out)
+{
+    const lsm_real x = t_s > 0 ? t_s / mv->cycle_s : 0;
+    const lsm_real n = (lsm_real)lsm_move_total_cycles(mv);
+    if (x >= n) {
+        lsm_move_eval_cycle(mv, axis, lsm_move_total_cycles(mv), 0, out);
+        return;
+    }
+    const lsm_real kf = lsm_floor(x);
+    lsm_move_eval_cycle(mv, axis, (uint32_t)kf, x - kf, out);
+}
+
+lsm_real lsm_move_end_error_mm(const lsm_move *mv, unsigned axis)
+{
+    lsm_kin k;
+    eval_travel(mv, axis, lsm_move_total_cycles(mv), 0, &k);
+    return mv->axis[axis].dir * k.s_mm - mv->axis[axis].distance_mm;
+}

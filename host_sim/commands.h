@@ -3,6 +3,10 @@
 #define LSM_SIM_COMMANDS_H
 
 int cmd_version(int argc, char **argv);
+int cmd_scurve(int argc, char **argv);
+int cmd_move(int argc, char **argv);
+int cmd_demo(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
 /* further subcommands declare here, one line each */
 
 #endif

@@ -18,6 +18,10 @@ typedef struct {
 
 static const subcommand k_commands[] = {
     {"version", cmd_version, "print the version"},
+    {"scurve", cmd_scurve, "plan one sin^2 velocity change (Kombarov §4)"},
+    {"move", cmd_move, "plan a synchronised point-to-point move on one or more axes"},
+    {"demo", cmd_demo, "S-curve demo: prints a summary, writes CSV and a PNG plot of J, A, V, S"},
+    {"bench", cmd_bench, "host benchmark of the S-curve planner and per-cycle evaluator"},
     /* further subcommands register here, one line each */
 };
 

@@ -1,0 +1,1 @@
+"""Lissom host-side Python: plotting, benchmarks and the CAN HIL rig."""

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Quick start, command 2 of 2: runs every test. `.ci/run` runs exactly this.
+#   1. dependencies (idempotent) and the host build
+#   2. ctest: the cmocka unit tests, double and float builds (randomized tests at their CI counts)
+#   3. the Cortex-M4F cross build: -Wall -Wextra -Werror, no heap or printf linked, images run under QEMU
+#   4. pytest: the Python tests (CLI contracts, references, plots, EDS, ...)
+# Ends with one line "tests: N passed, N failed".
+set -uo pipefail
+cd "$(dirname "$0")/.."
+scripts/deps.sh || exit 1
+scripts/build.sh || exit 1
+
+passed=0; failed=0; status=0
+log=$(mktemp)
+
+echo "== ctest"
+ctest --preset host 2>&1 | tee "$log"
+line=$(grep -E "tests passed, [0-9]+ tests? failed out of [0-9]+" "$log" | tail -1)
+if [ -n "$line" ]; then
+  nf=$(echo "$line" | sed -E 's/.* ([0-9]+) tests? failed out of ([0-9]+).*/\1/')
+  nt=$(echo "$line" | sed -E 's/.* failed out of ([0-9]+).*/\1/')
+  passed=$((passed + nt - nf)); failed=$((failed + nf))
+  [ "$nf" -eq 0 ] || status=1
+else
+  failed=$((failed + 1)); status=1
+fi
+
+if [ -x scripts/arm_check.sh ]; then
+  echo "== Cortex-M4F cross build and QEMU"
+  if scripts/arm_check.sh; then passed=$((passed + 1)); else failed=$((failed + 1)); status=1; fi
+fi
+
+echo "== pytest"
+export LISSOM_SIM="$PWD/build/bin/lissom-sim"
+.venv/bin/python -m pytest -q -p no:cacheprovider tests/py 2>&1 | tee "$log"
+rc=${PIPESTATUS[0]}
+sum=$(grep -E "^[0-9]+ (passed|failed)|^=+ .*(passed|failed)" "$log" | tail -1)
+pp=$(echo "$sum" | grep -oE "[0-9]+ passed" | grep -oE "[0-9]+" || true)
+pf=$(echo "$sum" | grep -oE "[0-9]+ failed" | grep -oE "[0-9]+" || true)
+pe=$(echo "$sum" | grep -oE "[0-9]+ errors?" | grep -oE "[0-9]+" || true)
+passed=$((passed + ${pp:-0})); failed=$((failed + ${pf:-0} + ${pe:-0}))
+if [ "$rc" -ne 0 ] && [ "$rc" -ne 5 ]; then status=1; [ -z "$pf$pe" ] && failed=$((failed + 1)); fi
+rm -f "$log"
+
+echo "tests: $passed passed, $failed failed"
+exit $status

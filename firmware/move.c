@@ -10,9 +10,9 @@
 #define LSM_MOVE_MAX_CYCLES 0x40000000u
 #define FIT_MAX_ITER 64
 #if LSM_REAL_IS_FLOAT
-#define BISECT_ITER 40
+#define BISECT_ITER 24
 #else
-#define BISECT_ITER 64
+#define BISECT_ITER 32
 #endif
 
 typedef struct shape {
@@ -340,47 +340,45 @@ void lsm_move_phases(const lsm_move *mv, unsigned axis, lsm_phase out[LSM_MOVE_P
     lsm_scurve_phases(&mv->dec, ax->jp_dec_mm_s3, out + 8);
 }
 
-/* Cycle index at which phase p starts. */
-static uint32_t phase_start_cycle(const lsm_phase *ph, unsigned p)
-{
-    uint32_t k = 0;
-    for (unsigned i = 0; i < p; i++)
-        k += ph[i].n_cycles;
-    return k;
-}
-
-void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin *out)
+void lsm_move_phase_starts(const lsm_move *mv, unsigned axis, lsm_kin out[LSM_MOVE_PHASES])
 {
     lsm_phase ph[LSM_MOVE_PHASES];
     lsm_move_phases(mv, axis, ph);
     const lsm_move_axis *ax = &mv->axis[axis];
-    const lsm_kin start = {0, ax->v0_mm_s, 0, 0};
-    if (p <= 7) { /* the first ramp and the cruise start: forward from the start */
-        lsm_phases_eval_cycle(ph, p, mv->cycle_s, &start, phase_start_cycle(ph, p), 0, out);
-        if (p == 7 && mv->cruise_cycles > 0) {
-            /* the cruise joins the two ramps exactly: its feed is (start of ramp 2 - end of ramp 1) / tc */
-            lsm_kin s8;
-            lsm_move_phase_start(mv, axis, 8, &s8);
-            out->v_mm_s = (s8.s_mm - out->s_mm) / ((lsm_real)mv->cruise_cycles * mv->cycle_s);
-            out->a_mm_s2 = 0;
-            out->j_mm_s3 = 0;
-        }
-        return;
+    /* the first ramp and the cruise start: forward from the start */
+    lsm_kin k = {0, ax->v0_mm_s, 0, 0};
+    for (unsigned p = 0; p <= 7; p++) {
+        out[p] = k;
+        if (p < 7)
+            lsm_phase_end(&ph[p], mv->cycle_s, &k, &k);
     }
     /* the second ramp: backward from the exact end state. Reversed in time, the ramp vc -> v1 is the standard
-     * ramp v1 -> vc with jerk amplitude -jp_dec; its distance from the end is the reversed ramp's travel. */
+     * ramp v1 -> vc with jerk amplitude -jp_dec; the distance left at a phase start is the reversed ramp's travel. */
     lsm_phase rev[7];
     lsm_scurve_phases(&mv->dec, -ax->jp_dec_mm_s3, rev);
-    const lsm_kin end = {0, ax->v1_mm_s, 0, 0};
-    uint32_t sigma = 0; /* cycles from the start of phase p to the end of the move */
-    for (unsigned i = p; i < LSM_MOVE_PHASES; i++)
-        sigma += ph[i].n_cycles;
-    lsm_kin r;
-    lsm_phases_eval_cycle(rev, 7, mv->cycle_s, &end, sigma, 0, &r);
-    out->s_mm = lsm_fabs(ax->distance_mm) - r.s_mm;
-    out->v_mm_s = r.v_mm_s;
-    out->a_mm_s2 = -r.a_mm_s2;
-    out->j_mm_s3 = r.j_mm_s3;
+    lsm_kin r = {0, ax->v1_mm_s, 0, 0};
+    const lsm_real D = lsm_fabs(ax->distance_mm);
+    for (unsigned q = 0; q < 7; q++) { /* reversed phase q is forward phase 14 - q; its end is that one's start */
+        lsm_phase_end(&rev[q], mv->cycle_s, &r, &r);
+        lsm_kin *o = &out[14 - q];
+        o->s_mm = D - r.s_mm;
+        o->v_mm_s = r.v_mm_s;
+        o->a_mm_s2 = -r.a_mm_s2;
+        o->j_mm_s3 = r.j_mm_s3;
+    }
+    /* the cruise joins the two ramps exactly: its feed is (start of ramp 2 - end of ramp 1) / tc */
+    if (mv->cruise_cycles > 0) {
+        out[7].v_mm_s = (out[8].s_mm - out[7].s_mm) / ((lsm_real)mv->cruise_cycles * mv->cycle_s);
+        out[7].a_mm_s2 = 0;
+        out[7].j_mm_s3 = 0;
+    }
+}
+
+void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin *out)
+{
+    lsm_kin all[LSM_MOVE_PHASES];
+    lsm_move_phase_starts(mv, axis, all);
+    *out = all[p];
 }
 
 /* Closed form in the travel frame: locate the phase, then advance from its start state; no terminal snapping. */
@@ -400,7 +398,7 @@ static void eval_travel(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real 
     if (p == LSM_MOVE_PHASES) { /* past the end */
         lsm_kin e;
         lsm_move_phase_start(mv, axis, LSM_MOVE_PHASES - 1, &e);
-        lsm_phase_advance(&ph[LSM_MOVE_PHASES - 1], mv->cycle_s, &e, (lsm_real)ph[LSM_MOVE_PHASES - 1].n_cycles * mv->cycle_s, out);
+        lsm_phase_end(&ph[LSM_MOVE_PHASES - 1], mv->cycle_s, &e, out);
         out->s_mm += out->v_mm_s * ((lsm_real)m + frac) * mv->cycle_s;
         out->j_mm_s3 = 0;
         return;

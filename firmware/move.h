@@ -101,6 +101,9 @@ void lsm_move_eval_cycle(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real
  */
 void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin *out);
 
+/* All 15 phase start states of one axis in one pass (no trigonometry: exact phase-end values). */
+void lsm_move_phase_starts(const lsm_move *mv, unsigned axis, lsm_kin out[LSM_MOVE_PHASES]);
+
 /*
  * Where the closed form itself lands at the end (before the terminal state takes over): s(T) - D in mm.
  * A measure of the plan's exactness (rounding only, ~1e-12 relative in double).

@@ -330,6 +330,33 @@ void lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *sta
     out->s_mm = s0.s_mm + s0.v_mm_s * t + s0.a_mm_s2 * t * t / 2 + jk * u[3];
 }
 
+void lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out)
+{
+    /* the unit shape at tau = T with the exact values cos(pi) = -1, sin(pi) = 0 (no trigonometry):
+     * rise: a = T/2, v = T²/4 - T²/pi², s = T³/12 - T³/(2 pi²); fall: the same with + (eqs 19-21) */
+    const lsm_real T = (lsm_real)ph->n_cycles * cycle_s;
+    lsm_real u[4];
+    if (ph->shape == LSM_PHASE_CONST) {
+        u[0] = 1;
+        u[1] = T;
+        u[2] = T * T / 2;
+        u[3] = T * T * T / 6;
+    } else {
+        const lsm_real sg = ph->shape == LSM_PHASE_RISE ? 1 : -1;
+        const lsm_real k = T * T / (PI_R * PI_R); /* 2 / (8 w²) */
+        u[0] = ph->shape == LSM_PHASE_RISE ? 1 : 0;
+        u[1] = T / 2;
+        u[2] = T * T / 4 - sg * k;
+        u[3] = T * T * T / 12 - sg * T * k / 2;
+    }
+    const lsm_real jk = ph->jerk_mm_s3;
+    const lsm_kin s0 = *start;
+    out->j_mm_s3 = jk * u[0];
+    out->a_mm_s2 = s0.a_mm_s2 + jk * u[1];
+    out->v_mm_s = s0.v_mm_s + s0.a_mm_s2 * T + jk * u[2];
+    out->s_mm = s0.s_mm + s0.v_mm_s * T + s0.a_mm_s2 * T * T / 2 + jk * u[3];
+}
+
 void lsm_phases_eval_cycle(const lsm_phase *ph, unsigned n_phases, lsm_real cycle_s, const lsm_kin *start, uint32_t k,
                            lsm_real frac, lsm_kin *out)
 {
@@ -343,7 +370,7 @@ void lsm_phases_eval_cycle(const lsm_phase *ph, unsigned n_phases, lsm_real cycl
             lsm_phase_advance(&ph[i], cycle_s, &st, ((lsm_real)m + frac) * cycle_s, out);
             return;
         }
-        lsm_phase_advance(&ph[i], cycle_s, &st, (lsm_real)n * cycle_s, &st);
+        lsm_phase_end(&ph[i], cycle_s, &st, &st);
         m -= n;
     }
     /* past the last phase: constant velocity */

@@ -175,6 +175,9 @@ void lsm_phase_unit(lsm_phase_shape shape, lsm_real T_s, lsm_real tau_s, lsm_rea
 void lsm_phases_eval_cycle(const lsm_phase *ph, unsigned n_phases, lsm_real cycle_s, const lsm_kin *start, uint32_t k,
                            lsm_real frac, lsm_kin *out);
 
+/* The state at the end of a phase, from its start state, with exact boundary values (no trigonometry). */
+void lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out);
+
 /* Advances a kinematic state through tau_s of a phase (closed form). */
 void lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out);
 

@@ -50,7 +50,9 @@ static bool enter_phase(lsm_stepgen *g, unsigned p)
         }
         for (unsigned i = 0; i < g->mv->n_axes; i++) {
             g->jerk[i] = jerk_of(&g->mv->axis[i], p);
-            lsm_move_phase_start(g->mv, i, p, &g->start[i]); /* closed form at the boundary (move.h) */
+            g->start[i].s_mm = g->st_s[p][i];
+            g->start[i].v_mm_s = g->st_v[p][i];
+            g->start[i].a_mm_s2 = g->st_a[p][i];
         }
         return true;
     }
@@ -75,8 +77,16 @@ lsm_status lsm_stepgen_init(lsm_stepgen *g, const lsm_move *mv, const lsm_real *
         g->cd_dec = lsm_cos(PI_R / (lsm_real)mv->dec.n1_cycles);
         g->sd_dec = lsm_sin(PI_R / (lsm_real)mv->dec.n1_cycles);
     }
-    for (unsigned i = 0; i < mv->n_axes; i++)
+    for (unsigned i = 0; i < mv->n_axes; i++) {
         g->origin_mm[i] = start_mm ? start_mm[i] : 0;
+        lsm_kin st[LSM_MOVE_PHASES];
+        lsm_move_phase_starts(mv, i, st);
+        for (unsigned p = 0; p < LSM_MOVE_PHASES; p++) {
+            g->st_s[p][i] = st[p].s_mm;
+            g->st_v[p][i] = st[p].v_mm_s;
+            g->st_a[p][i] = st[p].a_mm_s2;
+        }
+    }
     enter_phase(g, 0);
     return LSM_OK;
 }

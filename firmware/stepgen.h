@@ -9,8 +9,9 @@
  * multiply-adds per axis. The sin² phases need sin(phi), phi = pi m / n1 (= 2 w tau, Kombarov eq 9); it comes
  * from a rotation recurrence (cos, sin) <- (cos, sin) * (cos d, sin d), d = pi / n1, restarted exactly at
  * every phase start, so there is no trigonometric call per cycle (two per move, at init, for cos d and sin d).
- * Phase start states come from the closed form at the boundary (lsm_move_phase_start: the second ramp is taken
- * backward from the exact end), so rounding never accumulates across phases. Integer cycle counters throughout.
+ * Phase start states are computed once at init (lsm_move_phase_starts: exact boundary values, the second ramp
+ * taken backward from the exact end), so rounding never accumulates across phases and a phase change costs no
+ * more than an ordinary cycle. Integer cycle counters throughout.
  * The last cycle returns the exact target (the plan's terminal state).
  *
  * Units: mm, s; positions are absolute (start position + the move's travel).
@@ -32,6 +33,9 @@ typedef struct lsm_stepgen {
     lsm_real k8, k16;             /* 1/(8 w²), 1/(16 w³) of the current sin² phase (s², s³) */
     lsm_real origin_mm[LSM_MAX_AXES];
     lsm_kin start[LSM_MAX_AXES];  /* state at the current phase start (travel frame) */
+    lsm_real st_s[LSM_MOVE_PHASES][LSM_MAX_AXES]; /* every phase's start: s, v, a (from init, travel frame) */
+    lsm_real st_v[LSM_MOVE_PHASES][LSM_MAX_AXES];
+    lsm_real st_a[LSM_MOVE_PHASES][LSM_MAX_AXES];
     lsm_real jerk[LSM_MAX_AXES];  /* jerk amplitude of the current phase (travel frame) */
 } lsm_stepgen;
 

@@ -1,0 +1,17 @@
+/*
+ * cm_semihost.h: ARM semihosting (BKPT 0xAB) for output and exit under QEMU or a debugger.
+ * QEMU needs `-semihosting-config enable=on,target=native`; text goes to QEMU's stderr, and the exit code
+ * passed to cm_semihost_exit becomes QEMU's exit status.
+ */
+#ifndef CM_SEMIHOST_H
+#define CM_SEMIHOST_H
+
+#include <stdint.h>
+
+/* SYS_WRITE0: writes a NUL-terminated string to the host's console. */
+void cm_semihost_write0(const char *s);
+
+/* SYS_EXIT_EXTENDED (ADP_Stopped_ApplicationExit, code): ends the program; never returns. */
+__attribute__((noreturn)) void cm_semihost_exit(uint32_t code);
+
+#endif /* CM_SEMIHOST_H */

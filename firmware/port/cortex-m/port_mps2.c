@@ -1,0 +1,187 @@
+/*
+ * port_mps2.c: the Lissom port (firmware/port/lsm_port.h) for QEMU mps2-an386. What each facility maps to is
+ * listed in cm_board.h: SysTick = control tick, CMSDK TIMER0 = microsecond clock, FPGA I/O LEDs/button =
+ * GPIO, a RAM loopback queue = CAN (the board has no CAN controller).
+ *
+ * Contexts: the tick function runs in the SysTick handler. lsm_port_time_us and lsm_port_gpio_write may be
+ * called from both the tick and the main loop (they mask interrupts briefly). The CAN loopback queue is
+ * single producer / single consumer: send from one context, receive from one context.
+ */
+#include "lsm_port.h"
+
+#include "cm_board.h"
+
+#define CM_CAN_QUEUE 8u /* loopback depth; a power of two */
+
+static struct {
+    bool up;
+    /* tick */
+    volatile lsm_port_tick_fn tick_fn;
+    void *volatile tick_ctx;
+    volatile uint32_t overruns;
+    /* microsecond clock: TIMER0 counts down at 25 MHz; us = acc_us + (elapsed counts) / 25 */
+    uint32_t last_count;
+    uint32_t acc_us;
+    uint32_t rem_counts; /* counts not yet converted, < CM_SYSCLK_PER_US */
+    /* CAN loopback ring (indices run freely; slot = index % CM_CAN_QUEUE) */
+    lsm_can_frame can_q[CM_CAN_QUEUE];
+    volatile uint32_t can_head; /* next slot to write (producer) */
+    volatile uint32_t can_tail; /* next slot to read (consumer) */
+} g_port;
+
+lsm_status lsm_port_init(void)
+{
+    CM_SYST_CSR = 0u;
+    CM_FPGAIO_LED0 = 0u; /* every output inactive */
+    CM_TIMER0_CTRL = 0u;
+    CM_TIMER0_RELOAD = 0xFFFFFFFFu;
+    CM_TIMER0_VALUE = 0xFFFFFFFFu;
+    CM_TIMER0_CTRL = CM_TIMER_CTRL_EN;
+    g_port.last_count = CM_TIMER0_VALUE;
+    g_port.acc_us = 0u;
+    g_port.rem_counts = 0u;
+    g_port.tick_fn = NULL;
+    g_port.tick_ctx = NULL;
+    g_port.overruns = 0u;
+    g_port.can_head = 0u;
+    g_port.can_tail = 0u;
+    g_port.up = true;
+    return LSM_OK;
+}
+
+static bool can_frame_valid(const lsm_can_frame *f)
+{
+    if (f->dlc > LSM_CAN_MAX_DLC)
+        return false;
+    if ((f->flags & ~(LSM_CAN_FLAG_EXT | LSM_CAN_FLAG_RTR)) != 0u)
+        return false;
+    return f->id <= ((f->flags & LSM_CAN_FLAG_EXT) != 0u ? LSM_CAN_EXT_ID_MAX : LSM_CAN_STD_ID_MAX);
+}
+
+lsm_status lsm_port_can_send(const lsm_can_frame *frame)
+{
+    if (frame == NULL)
+        return LSM_E_NULL;
+    if (!g_port.up)
+        return LSM_E_STATE;
+    if (!can_frame_valid(frame))
+        return LSM_E_ARG;
+    uint32_t head = g_port.can_head;
+    if (head - g_port.can_tail >= CM_CAN_QUEUE)
+        return LSM_E_FULL;
+    g_port.can_q[head % CM_CAN_QUEUE] = *frame;
+    __asm__ volatile("dmb" ::: "memory"); /* the frame is in place before the consumer sees the index */
+    g_port.can_head = head + 1u;
+    return LSM_OK;
+}
+
+lsm_status lsm_port_can_recv(lsm_can_frame *frame)
+{
+    if (frame == NULL)
+        return LSM_E_NULL;
+    if (!g_port.up)
+        return LSM_E_STATE;
+    uint32_t tail = g_port.can_tail;
+    if (tail == g_port.can_head)
+        return LSM_E_EMPTY;
+    __asm__ volatile("dmb" ::: "memory");
+    *frame = g_port.can_q[tail % CM_CAN_QUEUE];
+    g_port.can_tail = tail + 1u;
+    return LSM_OK;
+}
+
+lsm_status lsm_port_gpio_read(lsm_gpio_in in, bool *active)
+{
+    if (active == NULL)
+        return LSM_E_NULL;
+    if ((unsigned)in >= (unsigned)LSM_GPIO_IN_COUNT)
+        return LSM_E_ARG;
+    if (!g_port.up) {
+        *active = true;
+        return LSM_E_STATE;
+    }
+    *active = (CM_FPGAIO_BUTTON & CM_BUTTON_ESTOP) != 0u;
+    return LSM_OK;
+}
+
+lsm_status lsm_port_gpio_write(lsm_gpio_out out, bool active)
+{
+    static const uint32_t k_mask[LSM_GPIO_OUT_COUNT] = {CM_LED_DRIVE_ENABLE, CM_LED_IN_POSITION};
+    if ((unsigned)out >= (unsigned)LSM_GPIO_OUT_COUNT)
+        return LSM_E_ARG;
+    if (!g_port.up)
+        return LSM_E_STATE;
+    uint32_t irq = cm_irq_save(); /* read-modify-write of a shared register */
+    uint32_t leds = CM_FPGAIO_LED0;
+    CM_FPGAIO_LED0 = active ? (leds | k_mask[out]) : (leds & ~k_mask[out]);
+    cm_irq_restore(irq);
+    return LSM_OK;
+}
+
+lsm_status lsm_port_tick_start(uint32_t period_us, lsm_port_tick_fn fn, void *ctx)
+{
+    if (fn == NULL)
+        return LSM_E_NULL;
+    if (period_us == 0u || period_us > (CM_SYST_MAX_RELOAD + 1u) / CM_SYSCLK_PER_US)
+        return LSM_E_ARG;
+    if (!g_port.up)
+        return LSM_E_STATE;
+    CM_SYST_CSR = 0u;
+    CM_SCB_ICSR = CM_SCB_ICSR_PENDSTCLR;
+    g_port.tick_fn = fn;
+    g_port.tick_ctx = ctx;
+    CM_SCB_SHPR3 = (CM_SCB_SHPR3 & 0x00FFFFFFu); /* SysTick at the highest configurable priority (0) */
+    CM_SYST_RVR = period_us * CM_SYSCLK_PER_US - 1u;
+    CM_SYST_CVR = 0u;
+    CM_SYST_CSR = CM_SYST_CSR_ENABLE | CM_SYST_CSR_TICKINT | CM_SYST_CSR_CLKSOURCE;
+    return LSM_OK;
+}
+
+lsm_status lsm_port_tick_stop(void)
+{
+    CM_SYST_CSR = 0u;
+    CM_SCB_ICSR = CM_SCB_ICSR_PENDSTCLR;
+    g_port.tick_fn = NULL;
+    return LSM_OK;
+}
+
+uint32_t lsm_port_tick_overruns(void)
+{
+    return g_port.overruns;
+}
+
+void SysTick_Handler(void);
+void SysTick_Handler(void)
+{
+    lsm_port_tick_fn fn = g_port.tick_fn;
+    (void)lsm_port_time_us(); /* keeps the microsecond clock's wrap tracking fresh (it needs a call per 171 s) */
+    if (fn != NULL)
+        fn(g_port.tick_ctx);
+    if ((CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u)
+        g_port.overruns++; /* the next tick fell due while this one ran: it starts late */
+}
+
+uint32_t lsm_port_time_us(void)
+{
+    if (!g_port.up)
+        return 0u;
+    uint32_t irq = cm_irq_save();
+    uint32_t now = CM_TIMER0_VALUE;
+    uint32_t elapsed = g_port.last_count - now; /* down-counter: wrap-safe below 171 s between calls */
+    g_port.last_count = now;
+    uint32_t counts = g_port.rem_counts + elapsed;
+    if (counts < elapsed) { /* 32-bit overflow of the sum: convert in two steps */
+        g_port.acc_us += elapsed / CM_SYSCLK_PER_US;
+        counts = g_port.rem_counts + elapsed % CM_SYSCLK_PER_US;
+    }
+    g_port.acc_us += counts / CM_SYSCLK_PER_US;
+    g_port.rem_counts = counts % CM_SYSCLK_PER_US;
+    uint32_t us = g_port.acc_us;
+    cm_irq_restore(irq);
+    return us;
+}
+
+void lsm_port_idle(void)
+{
+    cm_wfi();
+}

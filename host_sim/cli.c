@@ -1,6 +1,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <sys/stat.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -149,4 +150,39 @@ void json_num(FILE *f, double x)
         fputs("null", f);
     else
         fprintf(f, "%.17g", x);
+}
+
+int cli_mkdirs(const char *dir)
+{
+    char path[4096];
+    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path) {
+        fprintf(stderr, "error: path too long: %s\n", dir);
+        return -1;
+    }
+    for (char *p = path + 1; *p; p++) {
+        if (*p == '/') {
+            *p = '\0';
+            mkdir(path, 0755);
+            *p = '/';
+        }
+    }
+    if (mkdir(path, 0755) != 0 && errno != EEXIST) {
+        fprintf(stderr, "error: cannot create %s\n", dir);
+        return -1;
+    }
+    return 0;
+}
+
+FILE *cli_open_out(const char *dir, const char *name, char *path, size_t n)
+{
+    if (cli_mkdirs(dir) != 0)
+        return NULL;
+    if (snprintf(path, n, "%s/%s", dir, name) >= (int)n) {
+        fprintf(stderr, "error: path too long: %s/%s\n", dir, name);
+        return NULL;
+    }
+    FILE *f = fopen(path, "w");
+    if (!f)
+        fprintf(stderr, "error: cannot write %s\n", path);
+    return f;
 }

@@ -36,6 +36,11 @@ int cli_check_unused(cli_args *a, const char *cmd);
 /* Strict number parse of a token (whole token, allows nan/inf spellings). */
 int cli_parse_number(const char *s, double *out);
 
+/* mkdir -p: creates dir and its parents (0 ok, -1 with a message on stderr). */
+int cli_mkdirs(const char *dir);
+/* Opens dir/name for writing, creating dir; the full path goes to path (size n). NULL with a message. */
+FILE *cli_open_out(const char *dir, const char *name, char *path, size_t n);
+
 /* JSON output helpers: numbers are printed with 17 significant digits (round-trip exact in double);
  * NaN and inf (never expected) are printed as null. */
 void json_num(FILE *f, double x);

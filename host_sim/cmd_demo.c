@@ -6,12 +6,10 @@
  * and prints a summary: duration, peaks against the limits, end error.
  *   lissom-sim demo [--out DIR] [--distance MM] [--no-plot]
  */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -58,20 +56,6 @@ int cmd_demo(int argc, char **argv)
         return 2;
     if (!out)
         out = "out/demo";
-    char path[4096];
-    snprintf(path, sizeof path, "%s", out);
-    for (char *p = path + 1; *p; p++) {
-        if (*p == '/') {
-            *p = '\0';
-            mkdir(path, 0755);
-            *p = '/';
-        }
-    }
-    if (mkdir(path, 0755) != 0 && errno != EEXIST) {
-        fprintf(stderr, "error: cannot create %s\n", out);
-        return 1;
-    }
-
     /* Kombarov Table 1, Test 2 (A 1.57 m/s², J 16 m/s³, DJ 560 m/s⁴, feed 13.2 m/min), in mm */
     lsm_move_request req;
     memset(&req, 0, sizeof req);
@@ -87,13 +71,10 @@ int cmd_demo(int argc, char **argv)
         return 1;
     }
     char csv[4200], png[4200];
-    snprintf(csv, sizeof csv, "%s/scurve.csv", out);
     snprintf(png, sizeof png, "%s/scurve.png", out);
-    FILE *f = fopen(csv, "w");
-    if (!f) {
-        fprintf(stderr, "error: cannot write %s\n", csv);
+    FILE *f = cli_open_out(out, "scurve.csv", csv, sizeof csv);
+    if (!f)
         return 1;
-    }
     fprintf(f, "t,j,a,v,s\n");
     lsm_stepgen g;
     lsm_stepgen_init(&g, &mv, NULL);

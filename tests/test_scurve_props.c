@@ -16,6 +16,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include "lsm_test_rng.h"
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -28,16 +29,9 @@
 static unsigned long g_seed = 1;
 static long g_count = 20000;
 
-/* xorshift64*: deterministic across platforms */
 static uint64_t rng_state;
-static double urand(void)
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (double)((rng_state * 2685821657736338717ull) >> 11) / 9007199254740992.0;
-}
-static double logu(double lo, double hi) { return lo * pow(hi / lo, urand()); }
+static double urand(void) { return test_urand(&rng_state); }
+static double logu(double lo, double hi) { return test_logu(&rng_state, lo, hi); }
 
 static const double k_cycles[5] = {0.00025, 0.0005, 0.001, 0.002, 0.004};
 

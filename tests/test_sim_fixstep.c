@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include "lsm_test_rng.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -21,14 +22,8 @@
 static unsigned long g_seed = 1;
 static long g_count = 600;
 static uint64_t rs;
-static double urand(void)
-{
-    rs ^= rs >> 12;
-    rs ^= rs << 25;
-    rs ^= rs >> 27;
-    return (double)((rs * 2685821657736338717ull) >> 11) / 9007199254740992.0;
-}
-static double logu(double lo, double hi) { return lo * pow(hi / lo, urand()); }
+static double urand(void) { return test_urand(&rs); }
+static double logu(double lo, double hi) { return test_logu(&rs, lo, hi); }
 
 static void test_integer_matches_double(void **state)
 {

@@ -2,7 +2,7 @@
  * lissom-sim demo: the main job of the Quick start. Plans one point-to-point move with the firmware's sin²
  * S-curve (Kombarov Table 1 Test 2 limits, in mm), runs the per-cycle evaluator over it, and writes
  *   OUT/scurve.csv   one row per cycle: t,j,a,v,s (s, mm/s^3, mm/s^2, mm/s, mm)
- *   OUT/scurve.png   J, A, V and S against time (plotted by the Python module lissom_hil.scurve_plot)
+ *   OUT/scurve.png   J, A, V and S against time (plotted by the Python module lissom_hil.plot)
  * and prints a summary: duration, peaks against the limits, end error.
  *   lissom-sim demo [--out DIR] [--distance MM] [--no-plot]
  */
@@ -17,8 +17,8 @@
 #include "move.h"
 #include "stepgen.h"
 
-/* Runs `python -m lissom_hil.<module> CSV PNG` with the project's venv python (or $LISSOM_PYTHON). */
-int sim_plot(const char *module, const char *csv, const char *png)
+/* Runs `python -m lissom_hil.plot KIND CSV --out PNG` with the project's venv python (or $LISSOM_PYTHON). */
+int sim_plot(const char *kind, const char *csv, const char *png)
 {
     /* <repo>/build/bin/lissom-sim -> <repo>: the venv is <repo>/.venv, the package <repo>/hil/lissom_hil */
     char repo[3000];
@@ -39,7 +39,7 @@ int sim_plot(const char *module, const char *csv, const char *png)
     else
         snprintf(py, sizeof py, "%s/.venv/bin/python", repo);
     char cmd[9400];
-    snprintf(cmd, sizeof cmd, "PYTHONPATH='%s/hil' '%s' -m lissom_hil.%s '%s' '%s'", repo, py, module, csv, png);
+    snprintf(cmd, sizeof cmd, "PYTHONPATH='%s/hil' '%s' -m lissom_hil.plot %s '%s' --out '%s'", repo, py, kind, csv, png);
     return system(cmd);
 }
 
@@ -105,7 +105,7 @@ int cmd_demo(int argc, char **argv)
            (double)pos, dist, (double)lsm_move_end_error_mm(&mv, 0), max_gen_dev);
     printf("  wrote %s\n", csv);
     if (!no_plot) {
-        if (sim_plot("scurve_plot", csv, png) != 0) {
+        if (sim_plot("scurve", csv, png) != 0) {
             fprintf(stderr, "error: plotting failed (is the venv set up? scripts/deps.sh)\n");
             return 1;
         }

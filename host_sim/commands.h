@@ -7,6 +7,7 @@ int cmd_scurve(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
+int cmd_experiment(int argc, char **argv);
 /* further subcommands declare here, one line each */
 
 #endif

@@ -22,6 +22,7 @@ static const subcommand k_commands[] = {
     {"move", cmd_move, "plan a synchronised point-to-point move on one or more axes"},
     {"demo", cmd_demo, "S-curve demo: prints a summary, writes CSV and a PNG plot of J, A, V, S"},
     {"bench", cmd_bench, "host benchmark of the S-curve planner and per-cycle evaluator"},
+    {"experiment", cmd_experiment, "experiment kombarov: following error of trapezoid vs sin² vs constant jerk on the simulated drive"},
     /* further subcommands register here, one line each */
 };
 

@@ -61,9 +61,9 @@ static lsm_scurve_intervals iv_max(const lsm_scurve_intervals *a, const lsm_scur
     return r;
 }
 
-/* The minimal-time shape of one axis alone (before the exact fit). */
+/* The minimal-time shape of one axis alone (before the exact fit); *vp_out gets its peak feed. */
 static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1,
-                               lsm_scurve_rule rule, shape *sh)
+                               lsm_scurve_rule rule, shape *sh, lsm_real *vp_out)
 {
     const lsm_real vlo = lsm_max2(v0, v1);
     const lsm_real d_lo = ramps_distance(L, dt, v0, vlo, v1, rule);
@@ -95,7 +95,97 @@ static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D
             return LSM_E_TOO_LONG;
     }
     sh->nc = (uint32_t)nc;
+    *vp_out = vp;
     return LSM_OK;
+}
+
+/*
+ * With the ramp intervals of sh fixed, the fastest cruise length for which this axis's cruise feed keeps both
+ * ramps within the limits and under v_max. The feed is vc(nc) = num / (ta/2 + nc dt + td/2) (eq (1) of move.h)
+ * and the ramps hold any vc in [max(v0 - cap_a, v1 - cap_d), min(v0 + cap_a, v1 + cap_d)] (cap: the
+ * largest velocity change the intervals make within the limits), so the cruise lengths that work form an
+ * interval: take its start, verified exactly. False if there is none.
+ */
+static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *sh)
+{
+    const lsm_scurve_limits sl = ramp_limits(L);
+    const lsm_real ta = (lsm_real)lsm_scurve_total_cycles(&sh->acc) * dt;
+    const lsm_real td = (lsm_real)lsm_scurve_total_cycles(&sh->dec) * dt;
+    const lsm_real cap_a = lsm_scurve_dv_capacity(&sl, dt, &sh->acc);
+    const lsm_real cap_d = lsm_scurve_dv_capacity(&sl, dt, &sh->dec);
+    const lsm_real lo_v = lsm_max2(v0 - cap_a, v1 - cap_d);
+    const lsm_real hi_v = lsm_min2(lsm_min2(v0 + cap_a, v1 + cap_d), L->v_max_mm_s);
+    const lsm_real num = D - v0 * ta / 2 - v1 * td / 2;
+    const lsm_real base = ta / 2 + td / 2;
+    if (!(hi_v > 0) || hi_v < lo_v || !(num > 0))
+        return false;
+    lsm_real nlo = lsm_ceil((num / hi_v - base) / dt);
+    if (!(nlo >= 0))
+        nlo = 0;
+    if (base == 0 && nlo < 1)
+        nlo = 1;
+    lsm_real nhi = lo_v > 0 ? lsm_floor((num / lo_v - base) / dt) : (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
+    if (!(nhi < (lsm_real)(LSM_MOVE_MAX_CYCLES - 1)))
+        nhi = (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
+    for (lsm_real n = nlo; n <= nhi && n < nlo + 3; n++) { /* rounding at the window's edge: check exactly */
+        const lsm_real vc = num / (base + n * dt);
+        if (vc > 0 && vc <= L->v_max_mm_s && ramp_fits(L, dt, &sh->acc, vc - v0, LSM_SCURVE_RULE_STRICT) &&
+            ramp_fits(L, dt, &sh->dec, vc - v1, LSM_SCURVE_RULE_STRICT)) {
+            sh->nc = (uint32_t)n;
+            return true;
+        }
+    }
+    return false;
+}
+
+/*
+ * One axis alone, strict rule: the fastest whole-cycle shape that lands exactly on D. Tries the minimal-time
+ * peak vp* first (the usual answer), then peaks above it (ramps with more velocity capacity, for short moves
+ * between non-zero feeds whose remainder of a cycle a short ramp cannot absorb), then cruise feeds between
+ * and below the end feeds, each also with its ramps stretched at T4 (more capacity for a little more time);
+ * keeps the shortest that fits.
+ */
+#define ALT_PEAKS 36
+static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
+{
+    lsm_real vp;
+    lsm_status st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
+    if (st != LSM_OK)
+        return st;
+    if (window_nc(L, dt, D, v0, v1, best))
+        return LSM_OK;
+    const lsm_real vtop = lsm_max2(v0, v1), vmax = L->v_max_mm_s;
+    static const lsm_real up[4] = {LSM_R(0.03125), LSM_R(0.125), LSM_R(0.5), LSM_R(1.0)};
+    uint64_t best_total = UINT64_MAX;
+    /* a ramp lengthened at T4 gains velocity capacity linearly, at a small cost in time */
+    static const uint32_t stretch[4] = {0, 2, 8, 32};
+    for (int k = 0; k < ALT_PEAKS; k++) {
+        const lsm_real p = k < 4 ? vp + (vmax - vp) * up[k] : vtop * (lsm_real)(ALT_PEAKS - 1 - k) / (ALT_PEAKS - 4);
+        shape base;
+        if (!ramp(L, dt, p - v0, LSM_SCURVE_RULE_STRICT, &base.acc) ||
+            !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
+            return LSM_E_TOO_LONG;
+        for (int sa = 0; sa < 4; sa++) {
+            for (int sd = 0; sd < 4; sd++) {
+                shape sh = base;
+                if ((stretch[sa] && !sh.acc.n1_cycles) || (stretch[sd] && !sh.dec.n1_cycles))
+                    continue;
+                sh.acc.n4_cycles += stretch[sa];
+                sh.dec.n4_cycles += stretch[sd];
+                if (!window_nc(L, dt, D, v0, v1, &sh))
+                    continue;
+                const uint64_t total =
+                    (uint64_t)lsm_scurve_total_cycles(&sh.acc) + lsm_scurve_total_cycles(&sh.dec) + sh.nc;
+                if (total < best_total) {
+                    best_total = total;
+                    *best = sh;
+                }
+            }
+        }
+        if (best_total < UINT64_MAX && k >= 3)
+            break; /* the peaks above vp* are tried in full; below them, the first (highest) that fits wins */
+    }
+    return best_total < UINT64_MAX ? LSM_OK : LSM_E_INFEASIBLE;
 }
 
 static bool axis_still(const lsm_move_request *req, unsigned i)
@@ -199,45 +289,6 @@ static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_
     return LSM_E_INFEASIBLE;
 }
 
-/*
- * Fallback for short moves between non-zero feeds: when no whole-cycle profile over v_p >= max(v0, v1) lands
- * exactly on D within the limits (the slack D - d(v0 -> v1) is too small for a short ramp to absorb: a ramp's
- * velocity capacity grows with the cube of its length under a snap limit), cruise at a lower feed instead:
- * between v0 and v1 (the change split in two stages), or below both (a dip). Tries feeds from high to low;
- * the first that fits wins.
- */
-#define DIP_STEPS 32
-static lsm_status dip_shape(const lsm_move_request *req, unsigned i, shape *sh, lsm_move *mv)
-{
-    const lsm_axis_limits *L = &req->lim[i];
-    const lsm_real dt = req->cycle_s, D = lsm_fabs(req->distance_mm[i]);
-    const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
-    const lsm_real vtop = lsm_max2(v0, v1);
-    for (int k = 1; k <= DIP_STEPS; k++) {
-        const lsm_real vp = vtop * (lsm_real)(DIP_STEPS - k) / DIP_STEPS;
-        if (!ramp(L, dt, v0 - vp, req->rule, &sh->acc) || !ramp(L, dt, v1 - vp, req->rule, &sh->dec))
-            return LSM_E_TOO_LONG;
-        const lsm_real rest = D - ramps_distance(L, dt, v0, vp, v1, req->rule);
-        if (rest < 0)
-            continue;
-        lsm_real nc = vp > 0 ? lsm_ceil(rest / (vp * dt)) : 0;
-        if (vp == 0 && rest > 0)
-            continue; /* a full stop cannot absorb a remainder */
-        if (!(nc < (lsm_real)LSM_MOVE_MAX_CYCLES))
-            return LSM_E_TOO_LONG;
-        sh->nc = (uint32_t)nc;
-        shape trial = *sh;
-        lsm_status st = fit(req, i, &trial, mv);
-        if (st == LSM_OK) {
-            *sh = trial;
-            return LSM_OK;
-        }
-        if (st != LSM_E_INFEASIBLE)
-            return st;
-    }
-    return LSM_E_INFEASIBLE;
-}
-
 static lsm_status validate(const lsm_move_request *req)
 {
     if (req->n_axes < 1 || req->n_axes > LSM_MAX_AXES)
@@ -296,8 +347,13 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
         if (axis_still(req, i))
             continue;
         shape sh;
-        st = single_shape(&req->lim[i], dt, lsm_fabs(req->distance_mm[i]), req->v0_mm_s[i], req->v1_mm_s[i],
-                          req->rule, &sh);
+        const lsm_real D = lsm_fabs(req->distance_mm[i]);
+        if (req->rule == LSM_SCURVE_RULE_STRICT) {
+            st = single_plan(&req->lim[i], dt, D, req->v0_mm_s[i], req->v1_mm_s[i], &sh);
+        } else {
+            lsm_real vp;
+            st = single_shape(&req->lim[i], dt, D, req->v0_mm_s[i], req->v1_mm_s[i], req->rule, &sh, &vp);
+        }
         if (st != LSM_OK)
             return st;
         lsm_move_request one = *req;
@@ -305,8 +361,6 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
             if (k != i)
                 one.distance_mm[k] = one.v0_mm_s[k] = one.v1_mm_s[k] = 0;
         st = fit(&one, i, &sh, mv);
-        if (st == LSM_E_INFEASIBLE)
-            st = dip_shape(&one, i, &sh, mv);
         if (st != LSM_OK)
             return st;
         const uint32_t n = lsm_move_total_cycles(mv);

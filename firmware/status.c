@@ -53,7 +53,6 @@ const char *lsm_status_str(lsm_status st)
     case LSM_E_CO_NODE_ID: return "CANopen: node id outside 1..127";
     case LSM_E_CO_OD: return "CANopen: inconsistent object dictionary table";
     case LSM_E_CO_FRAME: return "CANopen: malformed frame ignored";
-    case LSM_E_CO_ABORT: return "CANopen: object access refused (see abort code)";
     case LSM_E_CO_MAPPING: return "CANopen: invalid PDO mapping";
     case LSM_E_CO_AXES: return "CANopen: axis count outside 1..LSM_MAX_AXES";
     case LSM_E_CO_SEQ_GAP: return "CANopen: path block sequence gap";

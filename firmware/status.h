@@ -80,14 +80,13 @@ typedef enum lsm_status {
     LSM_E_CO_NODE_ID = -100,       /* a CANopen node id outside 1..127 */
     LSM_E_CO_OD = -101,            /* the object-dictionary table is inconsistent (type, size, offset, duplicate, hook) */
     LSM_E_CO_FRAME = -102,         /* a received frame is malformed (wrong DLC for its protocol, RTR, 29-bit id); ignored */
-    LSM_E_CO_ABORT = -103,         /* an object access was refused; the SDO abort code says why */
-    LSM_E_CO_MAPPING = -104,       /* a PDO mapping is invalid (object not mappable, longer than 64 bits) */
-    LSM_E_CO_AXES = -105,          /* the axis count is outside 1..LSM_MAX_AXES */
-    LSM_E_CO_SEQ_GAP = -106,       /* a path block skips sequence numbers; it was not stored */
-    LSM_E_CO_SEQ_DUP = -107,       /* a path block repeats an accepted sequence number; discarded, not applied twice */
-    LSM_E_CO_BLOCK = -108,         /* a path block is malformed (length, type, plane, zero feed or tolerance) */
-    LSM_E_CO_NMT_STATE = -109,     /* the frame's service is not allowed in the present NMT state; ignored */
-    LSM_E_CO_BUS_OFF = -110,       /* the CAN controller is bus-off; nothing was queued */
+    LSM_E_CO_MAPPING = -103,       /* a PDO mapping is invalid (object not mappable, longer than 64 bits) */
+    LSM_E_CO_AXES = -104,          /* the axis count is outside 1..LSM_MAX_AXES */
+    LSM_E_CO_SEQ_GAP = -105,       /* a path block skips sequence numbers; it was not stored */
+    LSM_E_CO_SEQ_DUP = -106,       /* a path block repeats an accepted sequence number; discarded, not applied twice */
+    LSM_E_CO_BLOCK = -107,         /* a path block is malformed (length, type, plane, zero feed or tolerance, geometry) */
+    LSM_E_CO_NMT_STATE = -108,     /* the frame's service is not allowed in the present NMT state; ignored */
+    LSM_E_CO_BUS_OFF = -109,       /* the CAN controller is bus-off: nothing is queued until it recovers */
 
     /* ports (firmware/port/lsm_port.h) */
     LSM_E_PORT_IO = -120,          /* the board's hardware or the OS reported an error (port) */

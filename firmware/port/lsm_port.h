@@ -41,19 +41,9 @@
 
 /* ---- CAN ---- */
 
-#define LSM_CAN_MAX_DLC 8u              /* classic CAN: at most 8 data bytes */
-#define LSM_CAN_STD_ID_MAX 0x7FFu       /* largest 11-bit identifier */
-#define LSM_CAN_EXT_ID_MAX 0x1FFFFFFFu  /* largest 29-bit identifier */
-#define LSM_CAN_FLAG_EXT 0x01u          /* flags: the id is a 29-bit extended identifier */
-#define LSM_CAN_FLAG_RTR 0x02u          /* flags: remote transmission request (no data bytes are sent) */
-
-/* One classic CAN frame. */
-typedef struct lsm_can_frame {
-    uint32_t id;       /* identifier: <= LSM_CAN_STD_ID_MAX, or <= LSM_CAN_EXT_ID_MAX with LSM_CAN_FLAG_EXT */
-    uint8_t dlc;       /* number of data bytes, 0..8 */
-    uint8_t flags;     /* LSM_CAN_FLAG_* */
-    uint8_t data[8];   /* data bytes; only the first dlc are meaningful */
-} lsm_can_frame;
+/* The frame type (lsm_can_frame, LSM_CAN_FLAG_*, LSM_CAN_*_ID_MAX) is the core's, from can.h: a port passes
+ * frames between the controller and the CANopen layer unchanged. */
+#include "can.h"
 
 /* ---- GPIO, by logical function ---- */
 

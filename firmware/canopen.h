@@ -1,0 +1,177 @@
+/*
+ * canopen.h: the Lissom CANopen node: CiA 301 communication (NMT slave, heartbeat producer and consumer,
+ * SDO server, SYNC consumer, RPDO/TPDO, EMCY) around n CiA 402 axes (cia402.h) and the coordinated path
+ * buffer (co_path.h). Transport-agnostic: frames in, frames out, time as an argument.
+ *
+ * Using it (one node per CAN bus, all storage owned by the caller, no allocation, no globals):
+ *
+ *     static lsm_canopen node;                          // 2.5 KB on Cortex-M4F, see docs/canopen.md
+ *     static lsm_can_frame txbuf[16];
+ *     static lsm_co_path_block blocks[32];
+ *     lsm_canopen_config cfg = lsm_canopen_default_config();
+ *     cfg.node_id = 5; cfg.n_axes = 3; cfg.tx_storage = txbuf; cfg.tx_cap = 16;
+ *     cfg.path_storage = blocks; cfg.path_cap = 32;
+ *     lsm_canopen_init(&node, &cfg, now_us);            // queues the boot-up frame, PRE-OPERATIONAL
+ *     every control cycle (e.g. 1 ms):
+ *         while (port receives f)  lsm_canopen_rx(&node, &f, now_us);
+ *         lsm_canopen_estop(&node, estop_input, now_us);            // level; edges are detected inside
+ *         lsm_canopen_process(&node, now_us);                       // timers, heartbeats, events, TPDOs
+ *         for each axis k: ax = lsm_canopen_axis(&node, k)
+ *             lsm_cia402_stop_request(ax, &req)   -> honour it first (jerk-limited stop)
+ *             lsm_cia402_pp_fetch(ax, &sp)        -> PP: start / replace a move (S-curve engine)
+ *             lsm_cia402_csp_fetch(ax, &target)   -> CSP: new cyclic set-point
+ *         path = lsm_canopen_path(&node): lsm_co_path_get_motion, lsm_co_path_pop -> the planner
+ *         run the motion, then report:
+ *             lsm_cia402_update(ax, &fb, now_us);  lsm_co_path_update(path, &rep);
+ *         GPIO: drive enable = lsm_canopen_drive_enable(), in position = lsm_canopen_in_position()
+ *         while (lsm_canopen_tx_pop(&node, &f)) port sends f;
+ *
+ * Not reentrant: call every function of one node from one context (or serialise the calls); frames are
+ * queued, never sent from inside, so the port decides when and from where they go out.
+ *
+ * Reactions to faults and bad input (details and codes in docs/canopen.md):
+ *   - malformed frame (wrong DLC for its service, RTR, 29-bit id): ignored, counted (`malformed`), and for
+ *     PDOs and SYNC the CiA EMCY (0x8210, 0x8220, 0x8240); the call returns LSM_E_CO_FRAME;
+ *   - unknown objects, wrong sizes, out-of-range values: SDO abort codes (co_od.h);
+ *   - path block gaps / duplicates: co_path.h (refused with 0x06090031 / acknowledged without effect);
+ *   - heartbeat loss of a monitored node (0x1016): EMCY 0x8130, the 0x1029 sub 1 NMT behaviour (0 enter
+ *     PRE-OPERATIONAL [default], 1 no change, 2 enter STOPPED), the 0x6007 action on every axis (default 3:
+ *     quick stop) and a quick path hold; leaving OPERATIONAL for any reason also applies 0x6007;
+ *   - bus-off (lsm_canopen_bus_event): the same communication-error reaction; the TX queue is flushed and
+ *     nothing is queued until the port reports the bus is back; then EMCY 0x8140 (recovered from bus-off);
+ *   - E-stop (lsm_canopen_estop, rising edge): every axis enters FAULT REACTION ACTIVE (the fastest
+ *     jerk-limited stop) then FAULT with 0x603F = 0x9000, EMCY 0x9000; a fault reset is refused while the
+ *     input stays active; releasing it sends the EMCY error reset;
+ *   - NMT reset node: motion is first brought to a quick, jerk-limited stop, then everything restarts
+ *     with its defaults and a boot-up frame; reset communication restarts 0x1000-0x1FFF at once.
+ */
+#ifndef LSM_CANOPEN_H
+#define LSM_CANOPEN_H
+
+#include "can.h"
+#include "cia402.h"
+#include "co_emcy.h"
+#include "co_nmt.h"
+#include "co_od.h"
+#include "co_path.h"
+#include "co_pdo.h"
+#include "co_sdo.h"
+
+/* SDO buffer: the largest object transferred in segments (path block 48 bytes, device name). */
+#ifndef LSM_CANOPEN_SDO_BUF
+#define LSM_CANOPEN_SDO_BUF 64
+#endif
+
+/* CiA 301 device type 0x1000: profile 402, servo drive. */
+#define LSM_CANOPEN_DEVICE_TYPE 0x00020192u
+
+/* Events the port reports about its CAN controller. */
+typedef enum lsm_can_bus_event {
+    LSM_CAN_BUS_OK = 0,             /* error active again (after error passive or bus-off recovery) */
+    LSM_CAN_BUS_ERROR_PASSIVE = 1,  /* error passive: EMCY 0x8120 */
+    LSM_CAN_BUS_OFF = 2,            /* bus-off: communication-error reaction */
+    LSM_CAN_BUS_RX_OVERRUN = 3      /* the port lost received frames: EMCY 0x8110 */
+} lsm_can_bus_event;
+
+typedef struct lsm_canopen_config {
+    uint8_t node_id;                 /* 1..127 */
+    uint8_t n_axes;                  /* 1..LSM_MAX_AXES */
+    uint16_t heartbeat_ms;           /* 0x1017 default, 0 = off */
+    uint8_t master_node_id;          /* 0x1016 sub 1 default: node whose heartbeat is monitored, 1..127, 0 = none */
+    uint16_t master_timeout_ms;      /* its consumer time (0 = not monitored) */
+    uint32_t vendor_id;              /* 0x1018 sub 1..4 */
+    uint32_t product_code;
+    uint32_t revision;
+    uint32_t serial;
+    const char *device_name;         /* 0x1008 (NUL-terminated, caller-owned, at most 64 bytes shown) */
+    uint32_t sdo_timeout_us;         /* 0 = LSM_CO_SDO_TIMEOUT_US */
+    lsm_can_frame *tx_storage;       /* TX queue storage */
+    size_t tx_cap;
+    lsm_co_path_block *path_storage; /* path buffer storage */
+    size_t path_cap;
+} lsm_canopen_config;
+
+typedef struct lsm_canopen {
+    /* node objects */
+    uint32_t device_type;            /* 0x1000 */
+    uint32_t cycle_period_us;        /* 0x1006 (the master's SYNC period, for CSP; 0 = unknown) */
+    const char *device_name;         /* 0x1008 */
+    uint32_t identity[4];            /* 0x1018 sub 1..4 */
+    uint32_t sdo_cob_rx, sdo_cob_tx; /* 0x1200 sub 1, 2 */
+    uint8_t comm_error_behaviour;    /* 0x1029 sub 1 */
+    uint8_t machine_status;          /* 0x5020: bit 0 E-stop, bit 1 a monitored heartbeat lost, bit 2 bus-off */
+    uint8_t n_axes;
+    uint8_t node_id;
+    /* modules */
+    lsm_co_od od;
+    lsm_co_sdo sdo;
+    lsm_co_nmt nmt;
+    lsm_co_emcy emcy;
+    lsm_co_pdo pdo;
+    lsm_co_path path;
+    lsm_cia402 axis[LSM_MAX_AXES];
+    lsm_can_txq txq;
+    uint8_t sdo_buf[LSM_CANOPEN_SDO_BUF];
+    /* runtime */
+    lsm_canopen_config cfg;          /* kept for resets */
+    uint32_t now_us;                 /* time of the call being served */
+    uint32_t malformed;              /* frames ignored as malformed (wraps) */
+    uint32_t tx_dropped_seen;
+    uint8_t pending_reset;           /* lsm_co_nmt_cmd waiting for standstill, or 0 */
+    bool estop;
+    bool bus_off;
+    bool error_passive;
+} lsm_canopen;
+
+/* A configuration with the documented defaults: node id 1, 1 axis, heartbeat 100 ms, no consumer, no
+ * storage (the caller must set tx_storage/tx_cap and path_storage/path_cap). */
+lsm_canopen_config lsm_canopen_default_config(void);
+
+/*
+ * Builds the node and boots it: every object at its default, default PDO mapping (docs/canopen.md), the
+ * boot-up frame queued, NMT PRE-OPERATIONAL. Errors: LSM_E_NULL (node, cfg, storage), LSM_E_CO_NODE_ID,
+ * LSM_E_CO_AXES, LSM_E_ARG (a capacity 0 or > 65535, master_node_id > 127), LSM_E_CO_OD (internal table check
+ * failed: a bug).
+ */
+lsm_status lsm_canopen_init(lsm_canopen *node, const lsm_canopen_config *cfg, uint32_t now_us);
+
+/*
+ * Serves one received frame. Returns LSM_OK (served, or not addressed to this node), LSM_E_CO_FRAME
+ * (malformed: ignored; PDO/SYNC length errors also send their EMCY), LSM_E_CO_NMT_STATE (the service is not
+ * available in the present NMT state: ignored), LSM_E_NULL.
+ */
+lsm_status lsm_canopen_rx(lsm_canopen *node, const lsm_can_frame *f, uint32_t now_us);
+
+/* Timers (heartbeat, SDO timeout, event TPDOs), consumer timeouts, axis EMCY events, path/axis coupling,
+ * pending NMT reset. Call once per control cycle. Returns LSM_OK, LSM_E_CO_BUS_OFF (done, but the controller
+ * is bus-off: nothing was queued) or LSM_E_NULL. */
+lsm_status lsm_canopen_process(lsm_canopen *node, uint32_t now_us);
+
+/* Takes the next frame to send. False when none. */
+bool lsm_canopen_tx_pop(lsm_canopen *node, lsm_can_frame *out);
+
+/* Port-level controller events (see lsm_can_bus_event). */
+void lsm_canopen_bus_event(lsm_canopen *node, lsm_can_bus_event ev, uint32_t now_us);
+
+/* E-stop input level (true = stop requested); call every cycle, edges are detected here. */
+void lsm_canopen_estop(lsm_canopen *node, bool active, uint32_t now_us);
+
+/* An application fault on axis k (drive error, limit switch, ...): fault reaction with `code` in 0x603F
+ * and its EMCY. Errors: LSM_E_NULL, LSM_E_ARG (k). */
+lsm_status lsm_canopen_axis_fault(lsm_canopen *node, size_t k, uint16_t code);
+
+/* Accessors. lsm_canopen_axis returns NULL for k >= n_axes. */
+lsm_cia402 *lsm_canopen_axis(lsm_canopen *node, size_t k);
+lsm_co_path *lsm_canopen_path(lsm_canopen *node);
+lsm_co_od *lsm_canopen_od(lsm_canopen *node);
+lsm_co_nmt_state lsm_canopen_nmt_state(const lsm_canopen *node);
+uint32_t lsm_canopen_sync_count(const lsm_canopen *node);
+bool lsm_canopen_drive_enable(const lsm_canopen *node);  /* some axis has its power stage on */
+bool lsm_canopen_in_position(const lsm_canopen *node);   /* every axis in position */
+/* True when every axis may run path motion (OPERATION ENABLED, mode -1, no stop). */
+bool lsm_canopen_axes_ready_for_path(const lsm_canopen *node);
+
+/* The node's dictionary table (for tools that list it, e.g. the EDS check). */
+const lsm_co_od_entry *lsm_canopen_od_table(size_t *n_entries);
+
+#endif /* LSM_CANOPEN_H */

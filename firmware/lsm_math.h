@@ -1,7 +1,8 @@
 /*
- * lsm_math.h: the math functions of the core, bound to the real type chosen in lsm_config.h
- * (sqrt/cbrt/floor/ceil/sin/cos in double, their -f variants in float), and input checks.
- * Header-only: a few macros and static inline helpers, no state.
+ * lsm_math.h: the math functions of the core, bound to the real type chosen in lsm_config.h, and input checks.
+ * Double: the C library. Float: sqrtf/floorf/ceilf/fabsf from the C library (exact-rounded or exact on every
+ * target) and our own sin, cos, cbrt and atan2 (lsm_math.c), built from + - * / only, so that the float build
+ * gives bit-identical results on the host and on the Cortex-M4F.
  */
 #ifndef LSM_MATH_H
 #define LSM_MATH_H
@@ -12,13 +13,13 @@
 
 #if LSM_REAL_IS_FLOAT
 #define lsm_sqrt sqrtf
-#define lsm_cbrt cbrtf
+#define lsm_cbrt lsm_math_cbrtf
 #define lsm_floor floorf
 #define lsm_ceil ceilf
-#define lsm_sin sinf
-#define lsm_cos cosf
+#define lsm_sin lsm_math_sinf
+#define lsm_cos lsm_math_cosf
 #define lsm_fabs fabsf
-#define lsm_atan2 atan2f
+#define lsm_atan2 lsm_math_atan2f
 #define LSM_REAL_EPS 1.1920929e-7f
 #define LSM_REAL_MAX 3.4028235e38f
 #else
@@ -33,6 +34,12 @@
 #define LSM_REAL_EPS 2.220446049250313e-16
 #define LSM_REAL_MAX 1.7976931348623157e308
 #endif
+
+/* Deterministic single-precision functions (lsm_math.c); about 1-2 ulp. */
+float lsm_math_sinf(float x);
+float lsm_math_cosf(float x);
+float lsm_math_cbrtf(float x);
+float lsm_math_atan2f(float y, float x);
 
 /* 0 if x is finite, else LSM_E_NAN / LSM_E_INF (as int, to keep this header free of status.h). */
 static inline int lsm_check_finite(lsm_real x)

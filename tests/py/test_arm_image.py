@@ -33,12 +33,11 @@ QEMU_CMD = [
 
 EXPECTED_FMT = "fmt 0 4294967295 -2147483648 -42 0xdeadbeef 0x0000001a 123.45 -0.07 5 1000.000"
 
-# Parts whose per-cycle values call the C library's sinf/cosf (the closed-form evaluation, every cycle).
-# newlib-nano (MCU) and glibc (host) round some results differently by an ulp, so their cycle hashes cannot
-# match until the core carries its own sin/cos. The per-cycle evaluator (stepgen, part "move") uses a rotation
-# recurrence and calls sinf/cosf/cbrtf only when planning; it currently matches bit for bit, and a difference
-# there fails the test (if it ever comes from libm, the fix is the same: core-owned sin/cos/cbrt).
-LIBM_DEPENDENT_PARTS = {"scurve"}
+# Parts allowed to differ from the host by an ulp: none. The float core carries its own sin, cos, cbrt and atan2
+# (firmware/lsm_math.c, + - * / only), so every part must match the host bit for bit. (Before it did, the
+# closed-form part differed where newlib-nano and glibc round sinf differently.) Keep the mechanism for a
+# future part that must call the C library.
+LIBM_DEPENDENT_PARTS = set()
 
 # Sampled values must agree to this fraction of the largest magnitude of the same quantity in the same part
 # (float has 2^-23 = 1.2e-7 relative resolution; an ulp-level difference in sinf stays far below this).

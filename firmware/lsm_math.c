@@ -1,0 +1,121 @@
+/*
+ * lsm_math.c: deterministic single-precision sin, cos, cbrt and atan2 (lsm_math_*), built from + - * / only.
+ *
+ * Why: the float build must give bit-identical results on the host and on the Cortex-M4F (the image's setpoint
+ * checksum is compared with the host's), but glibc and newlib round sinf/cosf/cbrtf differently on some inputs.
+ * IEEE-754 makes + - * / and sqrt exact-rounded everywhere, and GCC in ISO C mode does not contract a*b+c into a
+ * fused multiply-add, so these functions give the same bits on every target.
+ * Method: Cody-Waite reduction by pi/2 with a three-part constant (exact for |x| < 2^15 pi/2), then the
+ * classic Cephes minimax polynomials on [-pi/4, pi/4]; cbrt by an exponent-halving first guess and three
+ * Newton steps; atan by the Cephes reduction to |t| <= tan(pi/8) and a degree-9 odd polynomial.
+ * Accuracy (tests/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
+ * The double build keeps the C library (lsm_math.h).
+ */
+#include "lsm_math.h"
+
+#include <string.h>
+
+#define PIO2_1 1.5703125f              /* pi/2 in three parts, the first two with trailing zero bits */
+#define PIO2_2 4.837512969970703e-4f
+#define PIO2_3 7.549790126404332e-8f
+#define TWO_OVER_PI 0.636619772367581f
+#define PIO2_F 1.5707963267948966f
+#define PIO4_F 0.7853981633974483f
+
+static float sin_poly(float r)
+{
+    const float z = r * r;
+    return ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+}
+
+static float cos_poly(float r)
+{
+    const float z = r * r;
+    return ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+}
+
+/* x = k pi/2 + r with |r| <= pi/4 (about); returns r and the quadrant k mod 4. */
+static float reduce(float x, unsigned *quadrant)
+{
+    const float kf = x * TWO_OVER_PI;
+    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
+    *quadrant = (unsigned)(int32_t)k & 3u;
+    return ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
+}
+
+float lsm_math_sinf(float x)
+{
+    if (x != x || x > 3.0e38f || x < -3.0e38f)
+        return x - x; /* NaN for NaN and inf */
+    unsigned q;
+    const float r = reduce(x, &q);
+    switch (q) {
+    case 0: return sin_poly(r);
+    case 1: return cos_poly(r);
+    case 2: return -sin_poly(r);
+    default: return -cos_poly(r);
+    }
+}
+
+float lsm_math_cosf(float x)
+{
+    if (x != x || x > 3.0e38f || x < -3.0e38f)
+        return x - x;
+    unsigned q;
+    const float r = reduce(x, &q);
+    switch (q) {
+    case 0: return cos_poly(r);
+    case 1: return -sin_poly(r);
+    case 2: return -cos_poly(r);
+    default: return sin_poly(r);
+    }
+}
+
+float lsm_math_cbrtf(float x)
+{
+    if (x == 0 || x != x || x > 3.0e38f || x < -3.0e38f)
+        return x;
+    const float a = x < 0 ? -x : x;
+    uint32_t bits;
+    memcpy(&bits, &a, sizeof bits);
+    bits = bits / 3u + 709921077u; /* a third of the exponent (and mantissa): within a few % of a^(1/3) */
+    float y;
+    memcpy(&y, &bits, sizeof y);
+    for (int i = 0; i < 3; i++)
+        y = y - (y * y * y - a) / (3.0f * y * y);
+    return x < 0 ? -y : y;
+}
+
+static float atan_pos(float a) /* a >= 0 */
+{
+    float base = 0;
+    if (a > 2.414213562373095f) {
+        base = PIO2_F;
+        a = -1.0f / a;
+    } else if (a > 0.4142135623730950f) {
+        base = PIO4_F;
+        a = (a - 1.0f) / (a + 1.0f);
+    }
+    const float z = a * a;
+    return base + ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * a + a);
+}
+
+float lsm_math_atan2f(float y, float x)
+{
+    if (x != x || y != y)
+        return x + y;
+    if (x == 0) {
+        if (y == 0)
+            return 0; /* as atan2(+0, +0); the core never relies on the signed-zero cases */
+        return y > 0 ? PIO2_F : -PIO2_F;
+    }
+    const float ay = y < 0 ? -y : y, ax = x < 0 ? -x : x;
+    float t;
+    if (ax >= ay)
+        t = atan_pos(ay / ax);
+    else
+        t = PIO2_F - atan_pos(ax / ay);
+    if (x < 0)
+        t = 2 * PIO2_F - t;
+    return y < 0 ? -t : t;
+}

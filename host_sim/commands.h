@@ -8,6 +8,9 @@ int cmd_move(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_experiment(int argc, char **argv);
+int cmd_clothoid(int argc, char **argv);
+int cmd_smooth(int argc, char **argv);
+int cmd_bench_clothoid(int argc, char **argv);
 /* further subcommands declare here, one line each */
 
 #endif

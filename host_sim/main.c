@@ -23,6 +23,9 @@ static const subcommand k_commands[] = {
     {"demo", cmd_demo, "S-curve demo: prints a summary, writes CSV and a PNG plot of J, A, V, S"},
     {"bench", cmd_bench, "host benchmark of the S-curve planner and per-cycle evaluator"},
     {"experiment", cmd_experiment, "experiment kombarov: following error of trapezoid vs sin² vs constant jerk on the simulated drive"},
+    {"clothoid", cmd_clothoid, "clothoid eval|fit: evaluate a clothoid or fit one to a line (Shahzadeh IV)"},
+    {"smooth", cmd_smooth, "G2 corner smoothing of a G-code file with clothoid pairs within a tolerance"},
+    {"bench-clothoid", cmd_bench_clothoid, "host benchmark: ns per corner smoothed and per clothoid step"},
     /* further subcommands register here, one line each */
 };
 

@@ -1,0 +1,769 @@
+/* clothoid.c: planar clothoids, Fresnel integrals, stepping and the section-IV fit (see clothoid.h). */
+#include "clothoid.h"
+
+#include "lsm_math.h"
+
+#if LSM_REAL_IS_FLOAT
+#define CL_SPLIT 4097.0f      /* 2^12 + 1: splits a float into two halves whose squares are exact */
+#define CL_TINY 1.0e-30f
+#define CL_HUGE_X 1.0e4f      /* above: x F(x) = i / (pi x) to float precision */
+#else
+#define CL_SPLIT 134217729.0  /* 2^27 + 1 */
+#define CL_TINY 1.0e-300
+#define CL_HUGE_X 1.0e8
+#endif
+
+#define CL_PI ((lsm_real)LSM_PI)
+#define CL_SERIES_X LSM_R(1.6) /* Fresnel: power series below, continued fraction above */
+
+/* 1 / (n + 1) for n = 0 .. LSM_CLOTHOID_MAX_TERMS + 3 (avoids divisions in the series loops). */
+#define CL_INV(n) ((lsm_real)(1.0 / (n)))
+static const lsm_real k_inv[] = {
+    CL_INV(1),  CL_INV(2),  CL_INV(3),  CL_INV(4),  CL_INV(5),  CL_INV(6),  CL_INV(7),  CL_INV(8),
+    CL_INV(9),  CL_INV(10), CL_INV(11), CL_INV(12), CL_INV(13), CL_INV(14), CL_INV(15), CL_INV(16),
+    CL_INV(17), CL_INV(18), CL_INV(19), CL_INV(20), CL_INV(21), CL_INV(22), CL_INV(23), CL_INV(24),
+    CL_INV(25), CL_INV(26), CL_INV(27), CL_INV(28), CL_INV(29), CL_INV(30), CL_INV(31), CL_INV(32),
+    CL_INV(33), CL_INV(34), CL_INV(35), CL_INV(36), CL_INV(37), CL_INV(38), CL_INV(39), CL_INV(40),
+    CL_INV(41), CL_INV(42), CL_INV(43), CL_INV(44), CL_INV(45), CL_INV(46), CL_INV(47), CL_INV(48)};
+_Static_assert(sizeof k_inv / sizeof k_inv[0] >= LSM_CLOTHOID_MAX_TERMS + 4, "k_inv too short");
+
+static inline lsm_real cl_abs1(lsm_real r, lsm_real i) { return lsm_fabs(r) + lsm_fabs(i); }
+
+/* Complex 1 / (br + i bi) without overflow (Smith). */
+static void cl_cinv(lsm_real br, lsm_real bi, lsm_real *rr, lsm_real *ri)
+{
+    if (lsm_fabs(br) >= lsm_fabs(bi)) {
+        lsm_real q = bi / br, d = br + bi * q;
+        *rr = LSM_R(1.0) / d;
+        *ri = -q / d;
+    } else {
+        lsm_real q = br / bi, d = br * q + bi;
+        *rr = q / d;
+        *ri = LSM_R(-1.0) / d;
+    }
+}
+
+/* ---------------------------------------------------------------- Taylor kernel */
+
+/* Stopping tolerance for a piece with psi(u) = a u + b u^2/2: the imaginary parts are about
+ * (|a| + |b|)/8 in size for small arguments, so the tail must be below eps times that. */
+static inline lsm_real cl_series_tol(lsm_real a, lsm_real b)
+{
+    lsm_real m = LSM_R(0.125) * (lsm_fabs(a) + lsm_fabs(b));
+    return LSM_REAL_EPS * LSM_R(0.25) * (m < LSM_R(1.0) ? m : LSM_R(1.0));
+}
+
+void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_clothoid_series *o)
+{
+    const lsm_real tol = rel ? cl_series_tol(a, b) : LSM_R(0.5) * LSM_REAL_EPS;
+    const lsm_real grow = lsm_fabs(a) + lsm_fabs(b);
+    /* g_{n-1} = (pr, pi), g_n = (gr, gi); sums in locals */
+    lsm_real pr = LSM_R(1.0), pi = LSM_R(0.0), gr = LSM_R(0.0), gi = a;
+    lsm_real er = LSM_R(1.0), ei = a;
+    lsm_real m0r = LSM_R(1.0), m0i = LSM_R(0.5) * a;
+    lsm_real m1r = LSM_R(0.5), m1i = a * k_inv[2];
+    lsm_real m2r = k_inv[2], m2i = LSM_R(0.25) * a;
+    int n = 1;
+    while (n + 1 < LSM_CLOTHOID_MAX_TERMS) {
+        const lsm_real inv = k_inv[n];                       /* 1 / (n + 1) */
+        const lsm_real tr = a * gr + b * pr, ti = a * gi + b * pi;
+        const lsm_real nr = -ti * inv, ni = tr * inv;        /* g_{n+1} = i (a g_n + b g_{n-1}) / (n+1) */
+        n++;
+        pr = gr;
+        pi = gi;
+        gr = nr;
+        gi = ni;
+        er += nr;
+        ei += ni;
+        const lsm_real i0 = k_inv[n];                        /* 1 / (n + 1) */
+        m0r += nr * i0;
+        m0i += ni * i0;
+        if (nmom > 1) {
+            const lsm_real i1 = k_inv[n + 1], i2 = k_inv[n + 2];
+            m1r += nr * i1;
+            m1i += ni * i1;
+            m2r += nr * i2;
+            m2i += ni * i2;
+        }
+        if ((lsm_real)(n + 1) > grow && cl_abs1(gr, gi) + cl_abs1(pr, pi) <= tol)
+            break;
+    }
+    o->n = n + 1;
+    o->er = er;
+    o->ei = ei;
+    o->mr[0] = m0r;
+    o->mi[0] = m0i;
+    o->mr[1] = nmom > 1 ? m1r : LSM_R(0.0);
+    o->mi[1] = nmom > 1 ? m1i : LSM_R(0.0);
+    o->mr[2] = nmom > 2 ? m2r : LSM_R(0.0);
+    o->mi[2] = nmom > 2 ? m2i : LSM_R(0.0);
+}
+
+/* Piecewise series over [0, s] (s > 0): moments int_0^s t^j e^{i theta(t)} dt, j < nmom, in absolute
+ * orientation; each piece turns at most 1 rad. Returns the number of pieces. */
+static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3], lsm_real mi[3])
+{
+    lsm_real ph = lsm_fabs(k0) * s + lsm_fabs(c) * s * s;
+    int m = 1;
+    if (ph > LSM_R(1.0))
+        m = (int)lsm_ceil(ph);
+    const lsm_real h = s / (lsm_real)m;
+    lsm_real rr = lsm_cos(th0), ri = lsm_sin(th0);
+    for (int j = 0; j < 3; j++)
+        mr[j] = mi[j] = LSM_R(0.0);
+    lsm_clothoid_series se;
+    for (int p = 0; p < m; p++) {
+        const lsm_real tj = h * (lsm_real)p;
+        const lsm_real kj = k0 + c * tj;
+        lsm_clothoid_series_eval(kj * h, c * h * h, nmom, true, &se);
+        /* local moments (w = t - tj): P0 = h M0, P1 = h^2 M1, P2 = h^3 M2 */
+        lsm_real p0r = h * se.mr[0], p0i = h * se.mi[0];
+        mr[0] += rr * p0r - ri * p0i;
+        mi[0] += rr * p0i + ri * p0r;
+        if (nmom > 1) {
+            lsm_real p1r = h * h * se.mr[1], p1i = h * h * se.mi[1];
+            lsm_real q1r = tj * p0r + p1r, q1i = tj * p0i + p1i;
+            mr[1] += rr * q1r - ri * q1i;
+            mi[1] += rr * q1i + ri * q1r;
+            if (nmom > 2) {
+                lsm_real p2r = h * h * h * se.mr[2], p2i = h * h * h * se.mi[2];
+                lsm_real q2r = tj * tj * p0r + LSM_R(2.0) * tj * p1r + p2r;
+                lsm_real q2i = tj * tj * p0i + LSM_R(2.0) * tj * p1i + p2i;
+                mr[2] += rr * q2r - ri * q2i;
+                mi[2] += rr * q2i + ri * q2r;
+            }
+        }
+        lsm_real nr = rr * se.er - ri * se.ei;
+        ri = rr * se.ei + ri * se.er;
+        rr = nr;
+    }
+    return m;
+}
+
+/* ---------------------------------------------------------------- Fresnel integrals */
+
+/* E(x) = C(x) + i S(x) for 0 <= x <= ~1.6: x * sum (i z)^k / (k! (2k + 1)), z = pi x^2 / 2. */
+static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
+{
+    const lsm_real z = CL_PI * LSM_R(0.5) * x * x;
+    lsm_real tr = LSM_R(1.0), ti = LSM_R(0.0);
+    lsm_real sr = LSM_R(1.0), si = LSM_R(0.0);
+    for (int k = 0; k < 60; k++) {
+        const lsm_real f = z / (lsm_real)(k + 1);
+        const lsm_real nr = -ti * f, ni = tr * f;
+        tr = nr;
+        ti = ni;
+        const lsm_real d = LSM_R(1.0) / (lsm_real)(2 * k + 3);
+        sr += tr * d;
+        si += ti * d;
+        const lsm_real smallest = lsm_fabs(si) < lsm_fabs(sr) ? lsm_fabs(si) : lsm_fabs(sr);
+        if (cl_abs1(tr, ti) * d <= LSM_R(0.25) * LSM_REAL_EPS * smallest)
+            break;
+    }
+    *c = x * sr;
+    *s = x * si;
+}
+
+/* x F(x) = g(x) + i f(x) for x > 1.6, where E(x) = (1 + i)/2 - x F(x) e^{i pi x^2 / 2} and
+ * F = 1 / (w + 1 - 1*2 / (w + 5 - 3*4 / (w + 9 - ...))), w = -i pi x^2 (the even continued fraction of
+ * erfc((1 - i) sqrt(pi) x / 2)), evaluated with the modified Lentz method. */
+static void cl_fresnel_aux(lsm_real x, lsm_real *gr, lsm_real *gi)
+{
+    if (x > CL_HUGE_X) {
+        *gr = LSM_R(1.0) / (CL_PI * CL_PI * x * x * x);
+        *gi = LSM_R(1.0) / (CL_PI * x);
+        return;
+    }
+    const lsm_real wi = -CL_PI * x * x;
+    lsm_real fr = LSM_R(1.0), fi = wi;       /* f = b0 */
+    lsm_real cr = fr, ci = fi;               /* C */
+    lsm_real dr = LSM_R(0.0), di = LSM_R(0.0); /* D */
+    for (int n = 1; n < 500; n++) {
+        const lsm_real a = -(lsm_real)((2 * n - 1) * (2 * n));
+        const lsm_real br = (lsm_real)(4 * n + 1), bi = wi;
+        /* D = 1 / (b + a D) */
+        lsm_real tr = br + a * dr, ti = bi + a * di;
+        if (cl_abs1(tr, ti) < CL_TINY)
+            tr = CL_TINY;
+        cl_cinv(tr, ti, &dr, &di);
+        /* C = b + a / C */
+        lsm_real ir, ii;
+        cl_cinv(cr, ci, &ir, &ii);
+        cr = br + a * ir;
+        ci = bi + a * ii;
+        if (cl_abs1(cr, ci) < CL_TINY)
+            cr = CL_TINY;
+        const lsm_real er = cr * dr - ci * di, ei = cr * di + ci * dr;
+        const lsm_real nr = fr * er - fi * ei;
+        fi = fr * ei + fi * er;
+        fr = nr;
+        if (cl_abs1(er - LSM_R(1.0), ei) <= LSM_REAL_EPS)
+            break;
+    }
+    lsm_real Fr, Fi;
+    cl_cinv(fr, fi, &Fr, &Fi);
+    *gr = x * Fr;
+    *gi = x * Fi;
+}
+
+/* cos and sin of pi x^2 / 2, with x^2 reduced modulo 4 without rounding the large part. */
+static void cl_phase_x2(lsm_real x, lsm_real *co, lsm_real *si)
+{
+    const lsm_real t = x * CL_SPLIT;
+    const lsm_real xh = t - (t - x);
+    const lsm_real xl = x - xh;
+    lsm_real h2 = xh * xh; /* exact */
+    h2 -= LSM_R(4.0) * lsm_floor(h2 * LSM_R(0.25));
+    lsm_real m2 = LSM_R(2.0) * xh * xl;
+    m2 -= LSM_R(4.0) * lsm_floor(m2 * LSM_R(0.25));
+    lsm_real r = h2 + m2 + xl * xl; /* x^2 mod 4, in [0, 12) */
+    r -= LSM_R(4.0) * lsm_floor(r * LSM_R(0.25));
+    if (r > LSM_R(2.0))
+        r -= LSM_R(4.0);
+    const lsm_real ang = CL_PI * LSM_R(0.5) * r;
+    *co = lsm_cos(ang);
+    *si = lsm_sin(ang);
+}
+
+void lsm_clothoid_fresnel(lsm_real x, lsm_real *c, lsm_real *s)
+{
+    const lsm_real ax = lsm_fabs(x);
+    lsm_real cc, ss;
+    if (ax == LSM_R(0.0)) {
+        cc = ss = LSM_R(0.0);
+    } else if (ax <= CL_SERIES_X) {
+        cl_fresnel_series(ax, &cc, &ss);
+    } else {
+        lsm_real gr, gi, co, si;
+        cl_fresnel_aux(ax, &gr, &gi);
+        cl_phase_x2(ax, &co, &si);
+        cc = LSM_R(0.5) - (gr * co - gi * si);
+        ss = LSM_R(0.5) - (gr * si + gi * co);
+    }
+    if (x < LSM_R(0.0)) {
+        cc = -cc;
+        ss = -ss;
+    }
+    *c = cc;
+    *s = ss;
+}
+
+/* ---------------------------------------------------------------- general integral */
+
+/* For c > 0 and an endpoint with scaled curvature u = kappa / sqrt(pi c) and angle th: the part of
+ * e^{i theta_v} E(u) = e^{i theta_v} A + B (see lsm_clothoid_integral). */
+static void cl_fresnel_end(lsm_real u, lsm_real th, lsm_real *ar, lsm_real *ai, lsm_real *br, lsm_real *bi)
+{
+    const lsm_real au = lsm_fabs(u);
+    const lsm_real sg = u < LSM_R(0.0) ? LSM_R(-1.0) : LSM_R(1.0);
+    if (au <= CL_SERIES_X) {
+        lsm_real cc, ss;
+        if (au == LSM_R(0.0)) {
+            cc = ss = LSM_R(0.0);
+        } else {
+            cl_fresnel_series(au, &cc, &ss);
+        }
+        *ar = sg * cc;
+        *ai = sg * ss;
+        *br = *bi = LSM_R(0.0);
+    } else {
+        lsm_real gr, gi;
+        cl_fresnel_aux(au, &gr, &gi);
+        const lsm_real co = lsm_cos(th), si = lsm_sin(th);
+        *ar = sg * LSM_R(0.5);
+        *ai = sg * LSM_R(0.5);
+        *br = -sg * (gr * co - gi * si);
+        *bi = -sg * (gr * si + gi * co);
+    }
+}
+
+#if LSM_REAL_IS_FLOAT
+static lsm_real cl_phase(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s)
+{
+    return th0 + s * (k0 + LSM_R(0.5) * c * s);
+}
+static lsm_real cl_vertex_phase(lsm_real th0, lsm_real k0, lsm_real c)
+{
+    return th0 - k0 * k0 / (LSM_R(2.0) * c);
+}
+#else
+/* Large phases (the Fresnel form is used when the clothoid turns more than 32 rad, up to ~1e8 rad
+ * for the Fresnel integrals at x ~ 1e4): the products are carried with their rounding errors (fma)
+ * and reduced modulo 2 pi with a two-part 2 pi, so that cos and sin see an angle good to ~eps. */
+#define CL_2PI_HI 6.283185307179586
+#define CL_2PI_LO 2.4492935982947064e-16
+static double cl_mod2pi(double hi, double lo)
+{
+    const double n = floor(hi / CL_2PI_HI + 0.5);
+    return (fma(-n, CL_2PI_HI, hi) - n * CL_2PI_LO) + lo;
+}
+/* theta0 + k0 s + c s^2 / 2, reduced */
+static double cl_phase(double th0, double k0, double c, double s)
+{
+    const double a = k0 * s, ae = fma(k0, s, -a);
+    const double p = s * s, pe = fma(s, s, -p);
+    const double hc = 0.5 * c;
+    const double b = hc * p, be = fma(hc, p, -b) + hc * pe;
+    return th0 + cl_mod2pi(a, ae) + cl_mod2pi(b, be);
+}
+/* theta0 - k0^2 / (2c), reduced */
+static double cl_vertex_phase(double th0, double k0, double c)
+{
+    const double q = k0 * k0, qe = fma(k0, k0, -q);
+    const double d = 2.0 * c;
+    const double v = q / d, ve = (fma(-v, d, q) + qe) / d;
+    return th0 - cl_mod2pi(v, ve);
+}
+#endif
+
+/* c > 0, s > 0. I = sqrt(pi/c) e^{i theta_v} [E(u1) - E(u0)], theta(t) = theta_v + pi u(t)^2 / 2. */
+static void cl_integral_fresnel(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy)
+{
+    const lsm_real sq = lsm_sqrt(CL_PI * c);
+    const lsm_real k1 = k0 + c * s;
+    const lsm_real th1 = cl_phase(th0, k0, c, s);
+    const lsm_real u0 = k0 / sq, u1 = k1 / sq;
+    lsm_real a0r, a0i, b0r, b0i, a1r, a1i, b1r, b1i;
+    cl_fresnel_end(u0, th0, &a0r, &a0i, &b0r, &b0i);
+    cl_fresnel_end(u1, th1, &a1r, &a1i, &b1r, &b1i);
+    lsm_real rr = b1r - b0r, ri = b1i - b0i;
+    const lsm_real dar = a1r - a0r, dai = a1i - a0i;
+    if (dar != LSM_R(0.0) || dai != LSM_R(0.0)) {
+        const lsm_real thv = cl_vertex_phase(th0, k0, c);
+        const lsm_real co = lsm_cos(thv), si = lsm_sin(thv);
+        rr += co * dar - si * dai;
+        ri += co * dai + si * dar;
+    }
+    const lsm_real f = CL_PI / sq; /* sqrt(pi / c) */
+    *dx = f * rr;
+    *dy = f * ri;
+}
+
+void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy)
+{
+    if (s == LSM_R(0.0)) {
+        *dx = *dy = LSM_R(0.0);
+        return;
+    }
+    if (s < LSM_R(0.0)) {
+        lsm_real x, y;
+        lsm_clothoid_integral(th0, -k0, c, -s, &x, &y);
+        *dx = -x;
+        *dy = -y;
+        return;
+    }
+    if (c == LSM_R(0.0)) {
+        const lsm_real h = LSM_R(0.5) * k0 * s;
+        const lsm_real sinc = h == LSM_R(0.0) ? LSM_R(1.0) : lsm_sin(h) / h;
+        const lsm_real a = th0 + h;
+        *dx = s * sinc * lsm_cos(a);
+        *dy = s * sinc * lsm_sin(a);
+        return;
+    }
+    const lsm_real phi = lsm_fabs(k0) * s + LSM_R(0.5) * lsm_fabs(c) * s * s;
+    if (phi <= (lsm_real)LSM_CLOTHOID_SERIES_PHASE_RAD) {
+        lsm_real mr[3], mi[3];
+        cl_pieces(th0, k0, c, s, 1, mr, mi);
+        *dx = mr[0];
+        *dy = mi[0];
+        return;
+    }
+    if (c > LSM_R(0.0)) {
+        cl_integral_fresnel(th0, k0, c, s, dx, dy);
+    } else {
+        lsm_real x, y;
+        cl_integral_fresnel(-th0, -k0, -c, s, &x, &y);
+        *dx = x;
+        *dy = -y;
+    }
+}
+
+/* ---------------------------------------------------------------- segments */
+
+static lsm_status cl_check(lsm_real v)
+{
+    return (lsm_status)lsm_check_finite(v);
+}
+
+lsm_status lsm_clothoid_init(lsm_clothoid *cl, lsm_real x0_mm, lsm_real y0_mm, lsm_real theta0_rad,
+                             lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real len_mm)
+{
+    if (cl == NULL)
+        return LSM_E_NULL;
+    const lsm_real v[6] = {x0_mm, y0_mm, theta0_rad, kappa0_per_mm, c_per_mm2, len_mm};
+    for (int i = 0; i < 6; i++) {
+        lsm_status st = cl_check(v[i]);
+        if (st != LSM_OK)
+            return st;
+    }
+    if (len_mm < LSM_R(0.0))
+        return LSM_E_RANGE;
+    cl->x0_mm = x0_mm;
+    cl->y0_mm = y0_mm;
+    cl->theta0_rad = theta0_rad;
+    cl->kappa0_per_mm = kappa0_per_mm;
+    cl->c_per_mm2 = c_per_mm2;
+    cl->len_mm = len_mm;
+    return LSM_OK;
+}
+
+static void cl_state(const lsm_clothoid *cl, lsm_real s, lsm_clothoid_state *out)
+{
+    lsm_real dx, dy;
+    lsm_clothoid_integral(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy);
+    out->x_mm = cl->x0_mm + dx;
+    out->y_mm = cl->y0_mm + dy;
+    out->theta_rad = cl->theta0_rad + s * (cl->kappa0_per_mm + LSM_R(0.5) * cl->c_per_mm2 * s);
+    out->kappa_per_mm = cl->kappa0_per_mm + cl->c_per_mm2 * s;
+}
+
+lsm_status lsm_clothoid_eval(const lsm_clothoid *cl, lsm_real s_mm, lsm_clothoid_state *out)
+{
+    if (cl == NULL || out == NULL)
+        return LSM_E_NULL;
+    lsm_status st = cl_check(s_mm);
+    if (st != LSM_OK)
+        return st;
+    cl_state(cl, s_mm, out);
+    if (lsm_check_finite(out->x_mm) || lsm_check_finite(out->y_mm) || lsm_check_finite(out->theta_rad) ||
+        lsm_check_finite(out->kappa_per_mm))
+        return LSM_E_RANGE;
+    return LSM_OK;
+}
+
+/* ---------------------------------------------------------------- stepping */
+
+static void cl_anchor(lsm_clothoid_stepper *st)
+{
+    lsm_clothoid_state s;
+    cl_state(&st->seg, st->s_mm, &s);
+    st->x_mm = s.x_mm;
+    st->y_mm = s.y_mm;
+    st->tx = lsm_cos(s.theta_rad);
+    st->ty = lsm_sin(s.theta_rad);
+    st->kappa_per_mm = s.kappa_per_mm;
+    st->cx_mm = st->cy_mm = LSM_R(0.0);
+    st->since_anchor = 0;
+}
+
+lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoid *seg, lsm_real s0_mm,
+                                     uint32_t anchor_every)
+{
+    if (st == NULL || seg == NULL)
+        return LSM_E_NULL;
+    lsm_clothoid tmp;
+    lsm_status r = lsm_clothoid_init(&tmp, seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm,
+                                     seg->c_per_mm2, seg->len_mm);
+    if (r != LSM_OK)
+        return r;
+    r = cl_check(s0_mm);
+    if (r != LSM_OK)
+        return r;
+    if (s0_mm < LSM_R(0.0) || s0_mm > seg->len_mm)
+        return LSM_E_RANGE;
+    st->seg = tmp;
+    st->s_mm = s0_mm;
+    st->cs_mm = LSM_R(0.0);
+    st->anchor_every = anchor_every;
+    cl_anchor(st);
+    return LSM_OK;
+}
+
+void lsm_clothoid_local(lsm_real a, lsm_real b, lsm_real *er_out, lsm_real *ei_out, lsm_real *mr_out,
+                        lsm_real *mi_out)
+{
+    const lsm_real tol = LSM_R(0.5) * LSM_REAL_EPS;
+    const lsm_real grow = lsm_fabs(a) + lsm_fabs(b);
+    /* g_0 = 1, g_1 = i a; E = sum g_n, M = sum g_n / (n + 1) */
+    lsm_real pr = LSM_R(1.0), pi = LSM_R(0.0), gr = LSM_R(0.0), gi = a;
+    lsm_real er = LSM_R(1.0), ei = a, mr = LSM_R(1.0), mi = LSM_R(0.5) * a;
+    for (int n = 1; n + 1 < LSM_CLOTHOID_MAX_TERMS; n++) {
+        const lsm_real tr = a * gr + b * pr, ti = a * gi + b * pi;
+        const lsm_real inv = k_inv[n];
+        const lsm_real nr = -ti * inv, ni = tr * inv;
+        pr = gr;
+        pi = gi;
+        gr = nr;
+        gi = ni;
+        er += nr;
+        ei += ni;
+        mr += nr * k_inv[n + 1];
+        mi += ni * k_inv[n + 1];
+        if ((lsm_real)(n + 2) > grow && cl_abs1(gr, gi) + cl_abs1(pr, pi) <= tol)
+            break;
+    }
+    *er_out = er;
+    *ei_out = ei;
+    *mr_out = mr;
+    *mi_out = mi;
+}
+
+/* One sub-step of length h whose turning |k h| + |c h^2| is at most about 1 rad. */
+static void cl_substep(lsm_clothoid_stepper *st, lsm_real h)
+{
+    lsm_real er, ei, mr, mi;
+    lsm_clothoid_local(st->kappa_per_mm * h, st->seg.c_per_mm2 * h * h, &er, &ei, &mr, &mi);
+    const lsm_real tx = st->tx, ty = st->ty;
+    /* compensated sums: the increments are small against the coordinates */
+    const lsm_real ix = h * (tx * mr - ty * mi) - st->cx_mm, iy = h * (tx * mi + ty * mr) - st->cy_mm;
+    const lsm_real nxp = st->x_mm + ix, nyp = st->y_mm + iy;
+    st->cx_mm = (nxp - st->x_mm) - ix;
+    st->cy_mm = (nyp - st->y_mm) - iy;
+    st->x_mm = nxp;
+    st->y_mm = nyp;
+    lsm_real nx = tx * er - ty * ei, ny = tx * ei + ty * er;
+    const lsm_real f = LSM_R(1.5) - LSM_R(0.5) * (nx * nx + ny * ny); /* one Newton step towards |t| = 1 */
+    st->tx = nx * f;
+    st->ty = ny * f;
+    st->kappa_per_mm += st->seg.c_per_mm2 * h; /* reset from the arc length after the step */
+}
+
+lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_clothoid_state *out)
+{
+    if (st == NULL)
+        return LSM_E_NULL;
+    lsm_status r = cl_check(ds_mm);
+    if (r != LSM_OK)
+        return r;
+    if (ds_mm < LSM_R(0.0))
+        return LSM_E_NEG_FEED;
+    const lsm_real left = st->seg.len_mm - st->s_mm;
+    bool at_end = false;
+    if (ds_mm >= left) {
+        ds_mm = left;
+        at_end = true;
+    }
+    if (ds_mm > LSM_R(0.0)) {
+        lsm_real ph = lsm_fabs(st->kappa_per_mm) * ds_mm + lsm_fabs(st->seg.c_per_mm2) * ds_mm * ds_mm;
+        if (ph <= LSM_R(1.0)) {
+            cl_substep(st, ds_mm);
+        } else { /* rare: a step that turns more than 1 rad */
+            int m = (int)lsm_ceil(ph);
+            lsm_real h = ds_mm / (lsm_real)m;
+            for (int i = 0; i < m; i++)
+                cl_substep(st, h);
+        }
+        const lsm_real is = ds_mm - st->cs_mm, ns = st->s_mm + is;
+        st->cs_mm = (ns - st->s_mm) - is;
+        st->s_mm = ns;
+        if (st->s_mm >= st->seg.len_mm)
+            at_end = true;
+        st->kappa_per_mm = st->seg.kappa0_per_mm + st->seg.c_per_mm2 * st->s_mm;
+        st->since_anchor++;
+    }
+    if (at_end) {
+        st->s_mm = st->seg.len_mm;
+        cl_anchor(st); /* land exactly on the end state */
+    } else if (st->anchor_every != 0 && st->since_anchor >= st->anchor_every) {
+        cl_anchor(st);
+    }
+    if (out != NULL) {
+        const lsm_real s = st->s_mm;
+        out->x_mm = st->x_mm;
+        out->y_mm = st->y_mm;
+        out->theta_rad = st->seg.theta0_rad + s * (st->seg.kappa0_per_mm + LSM_R(0.5) * st->seg.c_per_mm2 * s);
+        out->kappa_per_mm = st->kappa_per_mm;
+    }
+    return LSM_OK;
+}
+
+/* ---------------------------------------------------------------- fit (section IV) */
+
+typedef struct {
+    lsm_real x0, y0, th0, k0; /* start */
+    lsm_real nx, ny;          /* unit normal of the line */
+    lsm_real d0;              /* signed distance of the start from the line */
+    lsm_real delta;           /* required turning: theta(s) - theta0 */
+    int evals;
+} cl_fit;
+
+/* Residuals F1 = n.(P(s) - Q) (mm), F2 = theta(s) - theta_target (rad) and, if J, the Jacobian
+ * d(F1, F2)/d(c, s). Returns false if (c, s) is outside the domain searched. */
+static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_real *F2, lsm_real J[4])
+{
+    const lsm_real phi = lsm_fabs(f->k0) * s + LSM_R(0.5) * lsm_fabs(c) * s * s;
+    if (!(s > LSM_R(0.0)) || !(phi <= (lsm_real)LSM_CLOTHOID_FIT_MAX_PHASE_RAD))
+        return false;
+    lsm_real mr[3], mi[3];
+    cl_pieces(f->th0, f->k0, c, s, J ? 3 : 1, mr, mi);
+    f->evals++;
+    *F1 = f->d0 + f->nx * mr[0] + f->ny * mi[0];
+    *F2 = s * (f->k0 + LSM_R(0.5) * c * s) - f->delta;
+    if (J) {
+        const lsm_real th = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
+        /* dP/dc = int (t^2 / 2) i e^{i theta} dt = (i M2) / 2 */
+        J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]);   /* dF1/dc */
+        J[1] = f->nx * lsm_cos(th) + f->ny * lsm_sin(th);       /* dF1/ds */
+        J[2] = LSM_R(0.5) * s * s;                              /* dF2/dc */
+        J[3] = f->k0 + c * s;                                   /* dF2/ds */
+    }
+    return true;
+}
+
+static lsm_real cl_wrap_pi(lsm_real a)
+{
+    const lsm_real two_pi = LSM_R(2.0) * CL_PI;
+    a -= two_pi * lsm_floor(a / two_pi + LSM_R(0.5));
+    return a; /* in [-pi, pi) */
+}
+
+lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm,
+                               lsm_real nx, lsm_real ny, lsm_clothoid_fit_result *out)
+{
+    if (start == NULL || out == NULL)
+        return LSM_E_NULL;
+    const lsm_real v[8] = {start->x_mm, start->y_mm, start->theta_rad, start->kappa_per_mm, qx_mm, qy_mm, nx, ny};
+    for (int i = 0; i < 8; i++) {
+        lsm_status st = cl_check(v[i]);
+        if (st != LSM_OK)
+            return st;
+    }
+    const lsm_real nn = lsm_sqrt(nx * nx + ny * ny);
+    if (!(nn > LSM_R(0.0)) || lsm_check_finite(nn))
+        return LSM_E_FIT_LINE;
+    cl_fit f;
+    f.x0 = start->x_mm;
+    f.y0 = start->y_mm;
+    f.th0 = start->theta_rad;
+    f.k0 = start->kappa_per_mm;
+    f.nx = nx / nn;
+    f.ny = ny / nn;
+    f.evals = 0;
+    const lsm_real px = f.x0 - qx_mm, py = f.y0 - qy_mm;
+    f.d0 = f.nx * px + f.ny * py;
+    const lsm_real d_err = LSM_R(16.0) * LSM_REAL_EPS * (lsm_fabs(f.nx * px) + lsm_fabs(f.ny * py) +
+                                                        lsm_fabs(f.nx * qx_mm) + lsm_fabs(f.ny * qy_mm));
+    out->iterations = 0;
+    out->evaluations = 0;
+
+    if (lsm_fabs(f.d0) <= d_err) {
+        /* on the line: the only solution is s = 0, if the tangent is already along the normal */
+        const lsm_real cr = f.nx * lsm_sin(f.th0) - f.ny * lsm_cos(f.th0);
+        if (lsm_fabs(cr) <= LSM_R(16.0) * LSM_REAL_EPS) {
+            out->c_per_mm2 = LSM_R(0.0);
+            out->s_mm = LSM_R(0.0);
+            out->end = *start;
+            out->residual_mm = lsm_fabs(f.d0);
+            out->residual_rad = lsm_fabs(cr);
+            return LSM_OK;
+        }
+        return LSM_E_FIT_ON_LINE;
+    }
+    /* end tangent: the normal direction pointing across the line, on the branch within pi of theta0 */
+    const lsm_real sg = f.d0 > LSM_R(0.0) ? LSM_R(-1.0) : LSM_R(1.0);
+    const lsm_real th_t = lsm_atan2(sg * f.ny, sg * f.nx);
+    f.delta = cl_wrap_pi(th_t - f.th0);
+    const lsm_real dist = lsm_fabs(f.d0);
+
+    /* robust start: scan s geometrically for the first sign change of the reduced residual */
+    lsm_real sa = LSM_R(0.0), ra = f.d0, sb = LSM_R(0.0), rb = f.d0;
+    bool found = false;
+    for (int k = -4; k <= 24; k++) {
+        /* s = dist * 2^(k/2) */
+        lsm_real s = dist * ((k & 1) ? LSM_R(1.4142135623730951) : LSM_R(1.0));
+        int e = k >> 1; /* floor(k / 2) */
+        for (int i = 0; i < (e < 0 ? -e : e); i++)
+            s = e < 0 ? s * LSM_R(0.5) : s * LSM_R(2.0);
+        const lsm_real c = LSM_R(2.0) * (f.delta - f.k0 * s) / (s * s);
+        lsm_real F1, F2;
+        if (!cl_fit_eval(&f, c, s, &F1, &F2, NULL)) {
+            if (k > 0)
+                break; /* turning beyond the limit: stop searching */
+            continue;
+        }
+        if ((F1 > LSM_R(0.0)) != (f.d0 > LSM_R(0.0)) || F1 == LSM_R(0.0)) {
+            sb = s;
+            rb = F1;
+            found = true;
+            break;
+        }
+        sa = s;
+        ra = F1;
+    }
+    out->evaluations = f.evals;
+    if (!found)
+        return LSM_E_FIT_NO_SOLUTION;
+    lsm_real s = sa + (sb - sa) * ra / (ra - rb);
+    if (!(s > LSM_R(0.0)))
+        s = LSM_R(0.5) * sb;
+    lsm_real c = LSM_R(2.0) * (f.delta - f.k0 * s) / (s * s);
+
+    /* Newton on (c, s), damped */
+    lsm_real F1 = LSM_R(0.0), F2 = LSM_R(0.0), J[4];
+    int it = 0;
+    bool conv = false;
+    while (true) {
+        if (!cl_fit_eval(&f, c, s, &F1, &F2, J))
+            break;
+        const lsm_real tol1 = LSM_R(32.0) * LSM_REAL_EPS * (dist + s);
+        const lsm_real tol2 = LSM_R(32.0) * LSM_REAL_EPS * (LSM_R(1.0) + lsm_fabs(f.delta) + lsm_fabs(f.k0 * s));
+        if (lsm_fabs(F1) <= tol1 && lsm_fabs(F2) <= tol2) {
+            conv = true;
+            break;
+        }
+        if (it >= LSM_CLOTHOID_FIT_MAX_ITER)
+            break;
+        const lsm_real det = J[0] * J[3] - J[1] * J[2];
+        if (!(lsm_fabs(det) > LSM_R(0.0)))
+            break;
+        const lsm_real dc = (-F1 * J[3] + F2 * J[1]) / det;
+        const lsm_real dsv = (-F2 * J[0] + F1 * J[2]) / det;
+        const lsm_real m0 = (F1 / dist) * (F1 / dist) + F2 * F2;
+        lsm_real lam = LSM_R(1.0);
+        bool ok = false;
+        for (int h = 0; h < 30; h++, lam *= LSM_R(0.5)) {
+            const lsm_real cn = c + lam * dc, sn = s + lam * dsv;
+            lsm_real G1, G2;
+            if (!cl_fit_eval(&f, cn, sn, &G1, &G2, NULL))
+                continue;
+            const lsm_real m1 = (G1 / dist) * (G1 / dist) + G2 * G2;
+            if (m1 < m0 || m1 <= LSM_R(4.0) * LSM_REAL_EPS * LSM_REAL_EPS) {
+                c = cn;
+                s = sn;
+                ok = true;
+                break;
+            }
+        }
+        it++;
+        if (!ok)
+            break;
+    }
+    out->iterations = it;
+    out->evaluations = f.evals;
+    if (!conv)
+        return LSM_E_NOT_CONVERGED;
+    lsm_real mr[3], mi[3];
+    cl_pieces(f.th0, f.k0, c, s, 1, mr, mi);
+    out->c_per_mm2 = c;
+    out->s_mm = s;
+    out->end.x_mm = f.x0 + mr[0];
+    out->end.y_mm = f.y0 + mi[0];
+    out->end.theta_rad = f.th0 + s * (f.k0 + LSM_R(0.5) * c * s);
+    out->end.kappa_per_mm = f.k0 + c * s;
+    out->residual_mm = lsm_fabs(F1);
+    out->residual_rad = lsm_fabs(F2);
+    return LSM_OK;
+}
+
+lsm_status lsm_clothoid_fit_line(const lsm_clothoid_state *start, lsm_real a, lsm_real b, lsm_real c,
+                                 lsm_clothoid_fit_result *out)
+{
+    if (start == NULL || out == NULL)
+        return LSM_E_NULL;
+    const lsm_real v[3] = {a, b, c};
+    for (int i = 0; i < 3; i++) {
+        lsm_status st = cl_check(v[i]);
+        if (st != LSM_OK)
+            return st;
+    }
+    const lsm_real m = lsm_fabs(a) > lsm_fabs(b) ? lsm_fabs(a) : lsm_fabs(b);
+    if (!(m > LSM_R(0.0)))
+        return LSM_E_FIT_LINE;
+    a /= m; /* scale so that a^2 + b^2 cannot overflow */
+    b /= m;
+    c /= m;
+    const lsm_real n2 = a * a + b * b;
+    /* the foot of the origin on the line: Q = -c (a, b) / (a^2 + b^2) */
+    const lsm_real qx = -c * a / n2, qy = -c * b / n2;
+    return lsm_clothoid_fit_pn(start, qx, qy, a, b, out);
+}

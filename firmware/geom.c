@@ -1,0 +1,395 @@
+/* geom.c: lines, arcs and clothoids as path elements (see geom.h). */
+#include "geom.h"
+
+#include "clothoid.h"
+#include "lsm_math.h"
+
+#if LSM_REAL_IS_FLOAT
+#define GEOM_ORTHO_TOL LSM_R(1e-5)
+#else
+#define GEOM_ORTHO_TOL LSM_R(1e-6)
+#endif
+
+static lsm_status geom_check(const lsm_real *v, int n)
+{
+    for (int i = 0; i < n; i++) {
+        int r = lsm_check_finite(v[i]);
+        if (r != 0)
+            return (lsm_status)r;
+    }
+    return LSM_OK;
+}
+
+static lsm_real dot3(const lsm_real a[3], const lsm_real b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static bool geom_orthonormal(const lsm_real e1[3], const lsm_real e2[3])
+{
+    return lsm_fabs(dot3(e1, e1) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL &&
+           lsm_fabs(dot3(e1, e2)) <= GEOM_ORTHO_TOL;
+}
+
+static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
+{
+    for (int i = 0; i < 3; i++)
+        e1[i] = e2[i] = LSM_R(0.0);
+    switch (plane) {
+    case LSM_GEOM_PLANE_XY: e1[0] = e2[1] = LSM_R(1.0); return true;
+    case LSM_GEOM_PLANE_ZX: e1[2] = e2[0] = LSM_R(1.0); return true;
+    case LSM_GEOM_PLANE_YZ: e1[1] = e2[2] = LSM_R(1.0); return true;
+    case LSM_GEOM_PLANE_GENERAL: break;
+    }
+    return false;
+}
+
+lsm_status lsm_geom_line_init(lsm_geom *g, const lsm_real p0[LSM_MAX_AXES], const lsm_real p1[LSM_MAX_AXES])
+{
+    if (g == NULL || p0 == NULL || p1 == NULL)
+        return LSM_E_NULL;
+    lsm_status st = geom_check(p0, LSM_MAX_AXES);
+    if (st == LSM_OK)
+        st = geom_check(p1, LSM_MAX_AXES);
+    if (st != LSM_OK)
+        return st;
+    lsm_real d[LSM_MAX_AXES];
+    lsm_real xyz = LSM_R(0.0), all = LSM_R(0.0);
+    for (int i = 0; i < LSM_MAX_AXES; i++) {
+        d[i] = p1[i] - p0[i];
+        if (lsm_check_finite(d[i]))
+            return LSM_E_RANGE;
+        if (i < 3)
+            xyz += d[i] * d[i];
+        all += d[i] * d[i];
+    }
+    const bool rot = !(xyz > LSM_R(0.0));
+    const lsm_real len = lsm_sqrt(rot ? all : xyz);
+    if (!(len > LSM_R(0.0)))
+        return LSM_E_ZERO_LENGTH;
+    if (lsm_check_finite(len))
+        return LSM_E_RANGE;
+    g->kind = LSM_GEOM_LINE;
+    g->plane = 0;
+    g->rotary_only = rot ? 1u : 0u;
+    g->reserved = 0;
+    g->len = len;
+    for (int i = 0; i < LSM_MAX_AXES; i++) {
+        g->u.line.p0[i] = p0[i];
+        g->u.line.dir[i] = d[i] / len;
+    }
+    return LSM_OK;
+}
+
+static lsm_real geom_wrap_2pi(lsm_real a) /* to [0, 2 pi) */
+{
+    const lsm_real two_pi = (lsm_real)(2.0 * LSM_PI);
+    a -= two_pi * lsm_floor(a / two_pi);
+    if (a >= two_pi)
+        a -= two_pi;
+    return a;
+}
+
+static void geom_arc_len(lsm_geom *g)
+{
+    const lsm_real a = g->u.arc.radius_mm * g->u.arc.sweep_rad, b = g->u.arc.axial_mm;
+    g->len = lsm_sqrt(a * a + b * b);
+}
+
+lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_real end[3], const lsm_real centre[3],
+                             lsm_geom_plane plane, int dir, uint32_t turns)
+{
+    if (g == NULL || start == NULL || end == NULL || centre == NULL)
+        return LSM_E_NULL;
+    lsm_status st = geom_check(start, 3);
+    if (st == LSM_OK)
+        st = geom_check(end, 3);
+    if (st == LSM_OK)
+        st = geom_check(centre, 3);
+    if (st != LSM_OK)
+        return st;
+    lsm_real e1[3], e2[3], n[3];
+    if (!geom_plane_basis(plane, e1, e2) || (dir != 1 && dir != -1))
+        return LSM_E_ARG;
+    cross3(e1, e2, n);
+    lsm_real ds[3], de[3];
+    for (int i = 0; i < 3; i++) {
+        ds[i] = start[i] - centre[i];
+        de[i] = end[i] - centre[i];
+    }
+    const lsm_real u1 = dot3(ds, e1), v1 = dot3(ds, e2), u2 = dot3(de, e1), v2 = dot3(de, e2);
+    const lsm_real r1 = lsm_sqrt(u1 * u1 + v1 * v1), r2 = lsm_sqrt(u2 * u2 + v2 * v2);
+    if (!(r1 > LSM_R(0.0)) || !(r2 > LSM_R(0.0)) || lsm_check_finite(r1) || lsm_check_finite(r2))
+        return LSM_E_ARC_GEOMETRY;
+    if (lsm_fabs(r1 - r2) > (lsm_real)LSM_GEOM_ARC_TOL_MM)
+        return LSM_E_ARC_GEOMETRY;
+    const lsm_real phi0 = lsm_atan2(v1, u1);
+    const lsm_real phi1 = lsm_atan2(v2, u2);
+    lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+    /* end == start (to rounding) is a full circle */
+    const lsm_real cu = u2 - u1, cv = v2 - v1;
+    if (sweep == LSM_R(0.0) || lsm_sqrt(cu * cu + cv * cv) <= LSM_R(16.0) * LSM_REAL_EPS * r1)
+        sweep = (lsm_real)(2.0 * LSM_PI);
+    sweep += (lsm_real)(2.0 * LSM_PI) * (lsm_real)turns;
+    g->kind = LSM_GEOM_ARC;
+    g->plane = (uint8_t)plane;
+    g->rotary_only = 0;
+    g->reserved = 0;
+    const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
+    for (int i = 0; i < 3; i++) {
+        g->u.arc.centre_mm[i] = centre[i] + ns * n[i];
+        g->u.arc.e1[i] = e1[i];
+        g->u.arc.e2[i] = e2[i];
+    }
+    g->u.arc.radius_mm = r1;
+    g->u.arc.phi0_rad = phi0;
+    g->u.arc.sweep_rad = dir > 0 ? sweep : -sweep;
+    lsm_real dse[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
+    g->u.arc.axial_mm = dot3(dse, n);
+    geom_arc_len(g);
+    if (lsm_check_finite(g->len))
+        return LSM_E_RANGE;
+    return LSM_OK;
+}
+
+lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], const lsm_real e1[3], const lsm_real e2[3],
+                                     lsm_real radius_mm, lsm_real phi0_rad, lsm_real sweep_rad, lsm_real axial_mm)
+{
+    if (g == NULL || centre == NULL || e1 == NULL || e2 == NULL)
+        return LSM_E_NULL;
+    const lsm_real sc[4] = {radius_mm, phi0_rad, sweep_rad, axial_mm};
+    lsm_status st = geom_check(centre, 3);
+    if (st == LSM_OK)
+        st = geom_check(e1, 3);
+    if (st == LSM_OK)
+        st = geom_check(e2, 3);
+    if (st == LSM_OK)
+        st = geom_check(sc, 4);
+    if (st != LSM_OK)
+        return st;
+    if (!(radius_mm > LSM_R(0.0)) || !geom_orthonormal(e1, e2))
+        return LSM_E_ARC_GEOMETRY;
+    if (sweep_rad == LSM_R(0.0))
+        return LSM_E_ZERO_LENGTH;
+    g->kind = LSM_GEOM_ARC;
+    g->plane = LSM_GEOM_PLANE_GENERAL;
+    g->rotary_only = 0;
+    g->reserved = 0;
+    for (int i = 0; i < 3; i++) {
+        g->u.arc.centre_mm[i] = centre[i];
+        g->u.arc.e1[i] = e1[i];
+        g->u.arc.e2[i] = e2[i];
+    }
+    g->u.arc.radius_mm = radius_mm;
+    g->u.arc.phi0_rad = phi0_rad;
+    g->u.arc.sweep_rad = sweep_rad;
+    g->u.arc.axial_mm = axial_mm;
+    geom_arc_len(g);
+    if (lsm_check_finite(g->len))
+        return LSM_E_RANGE;
+    return LSM_OK;
+}
+
+lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const lsm_real e1[3], const lsm_real e2[3],
+                                  lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real len_mm)
+{
+    if (g == NULL || origin == NULL || e1 == NULL || e2 == NULL)
+        return LSM_E_NULL;
+    const lsm_real sc[4] = {theta0_rad, kappa0_per_mm, c_per_mm2, len_mm};
+    lsm_status st = geom_check(origin, 3);
+    if (st == LSM_OK)
+        st = geom_check(e1, 3);
+    if (st == LSM_OK)
+        st = geom_check(e2, 3);
+    if (st == LSM_OK)
+        st = geom_check(sc, 4);
+    if (st != LSM_OK)
+        return st;
+    if (!geom_orthonormal(e1, e2))
+        return LSM_E_ARG;
+    if (!(len_mm > LSM_R(0.0)))
+        return LSM_E_ZERO_LENGTH;
+    g->kind = LSM_GEOM_CLOTHOID;
+    g->plane = LSM_GEOM_PLANE_GENERAL;
+    g->rotary_only = 0;
+    g->reserved = 0;
+    for (int i = 0; i < 3; i++) {
+        g->u.clo.origin_mm[i] = origin[i];
+        g->u.clo.e1[i] = e1[i];
+        g->u.clo.e2[i] = e2[i];
+    }
+    g->u.clo.theta0_rad = theta0_rad;
+    g->u.clo.kappa0_per_mm = kappa0_per_mm;
+    g->u.clo.c_per_mm2 = c_per_mm2;
+    g->len = len_mm;
+    return LSM_OK;
+}
+
+static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3]) { cross3(a->e1, a->e2, n); }
+
+lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXES], lsm_real tan[3], lsm_real curv[3])
+{
+    if (g == NULL)
+        return LSM_E_NULL;
+    if (s != s)
+        return LSM_E_NAN;
+    if (s < LSM_R(0.0))
+        s = LSM_R(0.0);
+    if (s > g->len)
+        s = g->len;
+    switch ((lsm_geom_kind)g->kind) {
+    case LSM_GEOM_LINE: {
+        const lsm_geom_line *l = &g->u.line;
+        if (pos)
+            for (int i = 0; i < LSM_MAX_AXES; i++)
+                pos[i] = l->p0[i] + l->dir[i] * s;
+        for (int i = 0; i < 3; i++) {
+            if (tan)
+                tan[i] = g->rotary_only ? LSM_R(0.0) : l->dir[i];
+            if (curv)
+                curv[i] = LSM_R(0.0);
+        }
+        return LSM_OK;
+    }
+    case LSM_GEOM_ARC: {
+        const lsm_geom_arc *a = &g->u.arc;
+        const lsm_real f = s / g->len;
+        const lsm_real phi = a->phi0_rad + a->sweep_rad * f;
+        const lsm_real co = lsm_cos(phi), si = lsm_sin(phi);
+        lsm_real n[3];
+        geom_arc_normal(a, n);
+        const lsm_real w = a->sweep_rad / g->len; /* dphi/ds */
+        for (int i = 0; i < 3; i++) {
+            const lsm_real radial = co * a->e1[i] + si * a->e2[i];
+            if (pos)
+                pos[i] = a->centre_mm[i] + a->radius_mm * radial + n[i] * a->axial_mm * f;
+            if (tan)
+                tan[i] = w * a->radius_mm * (-si * a->e1[i] + co * a->e2[i]) + n[i] * a->axial_mm / g->len;
+            if (curv)
+                curv[i] = -w * w * a->radius_mm * radial;
+        }
+        return LSM_OK;
+    }
+    case LSM_GEOM_CLOTHOID: {
+        const lsm_geom_clothoid *c = &g->u.clo;
+        lsm_real X = LSM_R(0.0), Y = LSM_R(0.0);
+        if (pos)
+            lsm_clothoid_integral(c->theta0_rad, c->kappa0_per_mm, c->c_per_mm2, s, &X, &Y);
+        const lsm_real th = c->theta0_rad + s * (c->kappa0_per_mm + LSM_R(0.5) * c->c_per_mm2 * s);
+        const lsm_real k = c->kappa0_per_mm + c->c_per_mm2 * s;
+        const lsm_real co = lsm_cos(th), si = lsm_sin(th);
+        for (int i = 0; i < 3; i++) {
+            if (pos)
+                pos[i] = c->origin_mm[i] + c->e1[i] * X + c->e2[i] * Y;
+            if (tan)
+                tan[i] = co * c->e1[i] + si * c->e2[i];
+            if (curv)
+                curv[i] = k * (-si * c->e1[i] + co * c->e2[i]);
+        }
+        return LSM_OK;
+    }
+    }
+    return LSM_E_ARG;
+}
+
+lsm_real lsm_geom_kappa(const lsm_geom *g, lsm_real s)
+{
+    lsm_real cv[3];
+    if (lsm_geom_eval(g, s, NULL, NULL, cv) != LSM_OK)
+        return LSM_R(0.0);
+    return lsm_sqrt(dot3(cv, cv));
+}
+
+lsm_real lsm_geom_length(const lsm_geom *g) { return g ? g->len : LSM_R(0.0); }
+
+void lsm_geom_start_tangent(const lsm_geom *g, lsm_real t[3]) { (void)lsm_geom_eval(g, LSM_R(0.0), NULL, t, NULL); }
+
+void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3]) { (void)lsm_geom_eval(g, g->len, NULL, t, NULL); }
+
+bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
+{
+    if (g->kind == LSM_GEOM_ARC) {
+        geom_arc_normal(&g->u.arc, n);
+        return true;
+    }
+    if (g->kind == LSM_GEOM_CLOTHOID) {
+        cross3(g->u.clo.e1, g->u.clo.e2, n);
+        return true;
+    }
+    return false;
+}
+
+static lsm_status geom_trim_check(const lsm_geom *g, lsm_real d)
+{
+    if (g == NULL)
+        return LSM_E_NULL;
+    int r = lsm_check_finite(d);
+    if (r != 0)
+        return (lsm_status)r;
+    if (d < LSM_R(0.0) || d >= g->len)
+        return LSM_E_RANGE;
+    return LSM_OK;
+}
+
+lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
+{
+    lsm_status st = geom_trim_check(g, d);
+    if (st != LSM_OK || d == LSM_R(0.0))
+        return st;
+    switch ((lsm_geom_kind)g->kind) {
+    case LSM_GEOM_LINE:
+        for (int i = 0; i < LSM_MAX_AXES; i++)
+            g->u.line.p0[i] += g->u.line.dir[i] * d;
+        g->len -= d;
+        return LSM_OK;
+    case LSM_GEOM_ARC: {
+        lsm_geom_arc *a = &g->u.arc;
+        const lsm_real f = d / g->len;
+        lsm_real n[3];
+        geom_arc_normal(a, n);
+        for (int i = 0; i < 3; i++)
+            a->centre_mm[i] += n[i] * a->axial_mm * f;
+        a->phi0_rad += a->sweep_rad * f;
+        a->sweep_rad -= a->sweep_rad * f;
+        a->axial_mm -= a->axial_mm * f;
+        geom_arc_len(g);
+        return LSM_OK;
+    }
+    case LSM_GEOM_CLOTHOID: {
+        lsm_geom_clothoid *c = &g->u.clo;
+        lsm_real X, Y;
+        lsm_clothoid_integral(c->theta0_rad, c->kappa0_per_mm, c->c_per_mm2, d, &X, &Y);
+        for (int i = 0; i < 3; i++)
+            c->origin_mm[i] += c->e1[i] * X + c->e2[i] * Y;
+        c->theta0_rad += d * (c->kappa0_per_mm + LSM_R(0.5) * c->c_per_mm2 * d);
+        c->kappa0_per_mm += c->c_per_mm2 * d;
+        g->len -= d;
+        return LSM_OK;
+    }
+    }
+    return LSM_E_ARG;
+}
+
+lsm_status lsm_geom_trim_end(lsm_geom *g, lsm_real d)
+{
+    lsm_status st = geom_trim_check(g, d);
+    if (st != LSM_OK || d == LSM_R(0.0))
+        return st;
+    if (g->kind == LSM_GEOM_ARC) {
+        lsm_geom_arc *a = &g->u.arc;
+        const lsm_real f = LSM_R(1.0) - d / g->len;
+        a->sweep_rad *= f;
+        a->axial_mm *= f;
+        geom_arc_len(g);
+        return LSM_OK;
+    }
+    if (g->kind == LSM_GEOM_LINE || g->kind == LSM_GEOM_CLOTHOID) {
+        g->len -= d;
+        return LSM_OK;
+    }
+    return LSM_E_ARG;
+}

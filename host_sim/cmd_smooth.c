@@ -1,0 +1,454 @@
+/*
+ * lissom-sim smooth: G2 corner smoothing of a G-code program (firmware/corner.h).
+ *   lissom-sim smooth --gcode FILE --tolerance EPS [--amax A] [--jmax J] [--json]
+ *
+ * Reads the program with the G-code parser (firmware/gcode.h), turns G1/G2/G3 blocks into path
+ * elements (firmware/geom.h) and smooths every corner between two consecutive feed blocks with a
+ * clothoid pair within EPS (mm). Each block may lose at most half its length to each of its two
+ * corners. A corner is not blended (status "stop": the machine stops there) next to a rapid (G0),
+ * under G61, when a block moves A B C, when it is not planar, for an exact reversal, or when no
+ * transition fits; "joined" means there was nothing to smooth (already G2).
+ * The tolerance comes from --tolerance (G64 P in the file is not used; G61 is).
+ *
+ * Output (--json): per corner {"index","line","status", and when smoothed: "deviation",
+ * "vertex_deviation","path_deviation","deviation_sampled","kappa_max","sharpness_max","trim_before",
+ * "trim_after","angle_deg","iterations","scales","limited","feed_limit_eq7_mm_s","feed_limit_eq8_mm_s"};
+ * overall "max_deviation" (as the firmware computed it), "max_deviation_sampled" (an independent
+ * dense check here: 2000 samples per clothoid, exact distances to the programmed blocks),
+ * "max_curvature_jump" (1/mm, largest |difference of curvature vectors| over every joint the machine
+ * passes without stopping, after smoothing), "max_curvature_jump_rel", "max_position_gap",
+ * "max_tangent_jump_rad", "kappa_max" (whole path, arcs included), "sharpness_max", and the feed limits
+ * of eq 7 sqrt(amax/kappa_max) and eq 8 cbrt(jmax/sharpness_max), in mm/s and mm/min (null when
+ * unbounded). amax and jmax default to the paper's machine, 50 mm/s^2 and 500 mm/s^3.
+ * Exit: 0 ok; 1 bad file, G-code error or bad tolerance; 2 usage.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "corner.h"
+#include "gcode.h"
+#include "geom.h"
+
+typedef struct {
+    lsm_geom g;
+    uint32_t line;
+    int feed;      /* G1/G2/G3 (not a rapid) */
+    int stop_end;  /* G61 in force: stop at the end of this block */
+    int rotary;    /* an arc that moves A B C (its geometry ignores them) */
+} sm_block;
+
+typedef struct {
+    int status;            /* 0 smoothed, 1 joined, 2 stop */
+    const char *reason;
+    lsm_corner_result r;
+    double dev_sampled;
+} sm_corner;
+
+/* ---- reader: G-code file -> blocks (the one place that knows the input format) ---- */
+
+static int sm_read_gcode(const char *path, sm_block **out, int *n_out)
+{
+    FILE *f = fopen(path, "r");
+    if (f == NULL) {
+        fprintf(stderr, "error: smooth: cannot open '%s'\n", path);
+        return -1;
+    }
+    lsm_gcode p;
+    lsm_gcode_result res;
+    lsm_gcode_init(&p, NULL);
+    sm_block *b = NULL;
+    int n = 0, cap = 0;
+    char *line = NULL;
+    size_t lcap = 0;
+    ssize_t len;
+    int rc = 0;
+    while ((len = getline(&line, &lcap, f)) >= 0) {
+        lsm_status st = lsm_gcode_parse_line(&p, line, (size_t)len, &res);
+        if (st != LSM_OK) {
+            fprintf(stderr, "error: smooth: %s:%u:%u: %s (%d)\n", path, (unsigned)res.err.line,
+                    (unsigned)res.err.column, lsm_status_str(st), (int)st);
+            rc = -1;
+            break;
+        }
+        for (int k = 0; k < res.n_blocks; k++) {
+            const lsm_gcode_block *gb = &res.blocks[k];
+            if (n == cap) {
+                cap = cap ? 2 * cap : 64;
+                sm_block *nb = realloc(b, (size_t)cap * sizeof *b);
+                if (nb == NULL) {
+                    fprintf(stderr, "error: smooth: out of memory\n");
+                    rc = -1;
+                    break;
+                }
+                b = nb;
+            }
+            sm_block *s = &b[n];
+            memset(s, 0, sizeof *s);
+            s->line = gb->line;
+            s->feed = gb->type != LSM_GCODE_BLOCK_RAPID;
+            s->stop_end = res.modal.blend == LSM_GCODE_EXACT_STOP;
+            lsm_status gs;
+            if (gb->type == LSM_GCODE_BLOCK_ARC) {
+                gs = lsm_geom_arc_init(&s->g, gb->start, gb->end, gb->centre, (lsm_geom_plane)gb->plane, gb->dir,
+                                       gb->turns);
+                s->rotary = gb->start[3] != gb->end[3] || gb->start[4] != gb->end[4] || gb->start[5] != gb->end[5];
+            } else {
+                gs = lsm_geom_line_init(&s->g, gb->start, gb->end);
+            }
+            if (gs != LSM_OK) {
+                fprintf(stderr, "error: smooth: %s:%u: block geometry: %s (%d)\n", path, (unsigned)gb->line,
+                        lsm_status_str(gs), (int)gs);
+                rc = -1;
+                break;
+            }
+            n++;
+        }
+        if (rc != 0 || res.end_of_program)
+            break;
+    }
+    free(line);
+    fclose(f);
+    if (rc != 0) {
+        free(b);
+        return rc;
+    }
+    *out = b;
+    *n_out = n;
+    return 0;
+}
+
+/* ---- independent deviation check (dense sampling, exact distances, double) ---- */
+
+static double sm_dist_block(const lsm_geom *g, const double p[3])
+{
+    double q[LSM_MAX_AXES];
+    if (g->kind == LSM_GEOM_LINE) {
+        const lsm_geom_line *l = &g->u.line;
+        double t = 0.0;
+        for (int i = 0; i < 3; i++)
+            t += (p[i] - l->p0[i]) * l->dir[i];
+        if (t < 0.0)
+            t = 0.0;
+        if (t > g->len)
+            t = g->len;
+        double d2 = 0.0;
+        for (int i = 0; i < 3; i++) {
+            const double e = p[i] - l->p0[i] - l->dir[i] * t;
+            d2 += e * e;
+        }
+        return sqrt(d2);
+    }
+    const lsm_geom_arc *a = &g->u.arc;
+    double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
+                   a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
+    double u = 0.0, v = 0.0, h = 0.0;
+    for (int i = 0; i < 3; i++) {
+        const double w = p[i] - a->centre_mm[i];
+        u += w * a->e1[i];
+        v += w * a->e2[i];
+        h += w * n[i];
+    }
+    const double rho = hypot(u, v);
+    const double two_pi = 2.0 * LSM_PI;
+    double rel = a->sweep_rad > 0 ? atan2(v, u) - a->phi0_rad : a->phi0_rad - atan2(v, u);
+    rel -= two_pi * floor(rel / two_pi);
+    if (fabs(a->sweep_rad) >= two_pi || rel <= fabs(a->sweep_rad))
+        return hypot(rho - a->radius_mm, h);
+    double best = HUGE_VAL;
+    for (int e = 0; e < 2; e++) {
+        lsm_geom_eval(g, e ? g->len : 0.0, q, NULL, NULL);
+        const double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+        if (d < best)
+            best = d;
+    }
+    return best;
+}
+
+typedef struct {
+    const lsm_corner_result *r;
+    const lsm_geom *b1, *b2;
+    double v[3];
+} sm_check;
+
+/* which 0: -(distance to the corner point)^2 ; 1: distance to the programmed path */
+static double sm_f(const sm_check *c, int which, double t)
+{
+    const double L = c->r->trans[0].len;
+    double p[LSM_MAX_AXES];
+    if (t <= L)
+        lsm_geom_eval(&c->r->trans[0], t, p, NULL, NULL);
+    else
+        lsm_geom_eval(&c->r->trans[1], t - L, p, NULL, NULL);
+    if (which == 0) {
+        double d2 = 0.0;
+        for (int i = 0; i < 3; i++)
+            d2 += (p[i] - c->v[i]) * (p[i] - c->v[i]);
+        return -d2;
+    }
+    const double a = sm_dist_block(c->b1, p), b = sm_dist_block(c->b2, p);
+    return a < b ? a : b;
+}
+
+static double sm_sampled_deviation(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_result *r)
+{
+    sm_check c = {r, b1, b2, {0, 0, 0}};
+    double pv[LSM_MAX_AXES];
+    lsm_geom_eval(b1, b1->len, pv, NULL, NULL);
+    memcpy(c.v, pv, sizeof c.v);
+    const int n = 2000;
+    const double T = r->trans[0].len + r->trans[1].len, h = T / n;
+    double res[2];
+    for (int w = 0; w < 2; w++) {
+        double best = -HUGE_VAL;
+        int arg = 0;
+        for (int i = 0; i <= n; i++) {
+            const double f = sm_f(&c, w, h * i);
+            if (f > best) {
+                best = f;
+                arg = i;
+            }
+        }
+        double a = h * (arg > 0 ? arg - 1 : 0), b = h * (arg < n ? arg + 1 : n);
+        const double g = 0.6180339887498949;
+        for (int k = 0; k < 60; k++) {
+            const double x1 = b - g * (b - a), x2 = a + g * (b - a);
+            const double f1 = sm_f(&c, w, x1), f2 = sm_f(&c, w, x2);
+            if (f1 > best)
+                best = f1;
+            if (f2 > best)
+                best = f2;
+            if (f1 >= f2)
+                b = x2;
+            else
+                a = x1;
+        }
+        res[w] = best;
+    }
+    const double vd = sqrt(-res[0]), pd = res[1];
+    return vd > pd ? vd : pd;
+}
+
+/* ---- joints of the smoothed path ---- */
+
+typedef struct {
+    double gap, tan, curv, curv_rel;
+    uint32_t worst_line;
+} sm_joint;
+
+/* The relative jump is taken against the larger of the two curvatures and `scale` (the corner's
+ * kappa_max), so that rounding at a line's zero curvature does not count as a 100 % jump. */
+static void sm_joint_check(const lsm_geom *a, const lsm_geom *b, sm_joint *j, uint32_t line, double scale)
+{
+    double pa[LSM_MAX_AXES], pb[LSM_MAX_AXES], ta[3], tb[3], ca[3], cb[3];
+    lsm_geom_eval(a, a->len, pa, ta, ca);
+    lsm_geom_eval(b, 0.0, pb, tb, cb);
+    double g2 = 0.0, c2 = 0.0, na = 0.0, nb = 0.0, dt = 0.0;
+    for (int i = 0; i < 3; i++) {
+        g2 += (pa[i] - pb[i]) * (pa[i] - pb[i]);
+        c2 += (ca[i] - cb[i]) * (ca[i] - cb[i]);
+        na += ca[i] * ca[i];
+        nb += cb[i] * cb[i];
+        dt += (ta[i] - tb[i]) * (ta[i] - tb[i]);
+    }
+    const double gap = sqrt(g2), cj = sqrt(c2);
+    const double cmax = sqrt(na > nb ? na : nb);
+    if (cmax > scale)
+        scale = cmax;
+    const double tj = 2.0 * asin(fmin(1.0, 0.5 * sqrt(dt)));
+    const double rel = scale > 0.0 ? cj / scale : 0.0;
+    if (gap > j->gap)
+        j->gap = gap;
+    if (tj > j->tan)
+        j->tan = tj;
+    if (cj > j->curv)
+        j->curv = cj;
+    if (rel > j->curv_rel) {
+        j->curv_rel = rel;
+        j->worst_line = line;
+    }
+}
+
+static void sm_num(const char *key, double v, int *first)
+{
+    printf("%s\"%s\": ", *first ? "" : ", ", key);
+    json_num(stdout, v);
+    *first = 0;
+}
+
+int cmd_smooth(int argc, char **argv)
+{
+    cli_args a;
+    cli_init(&a, argc, argv);
+    const char *path = cli_opt(&a, "gcode");
+    double eps, amax = 50.0, jmax = 500.0;
+    if (cli_num_req(&a, "tolerance", &eps) || cli_num(&a, "amax", &amax) < 0 || cli_num(&a, "jmax", &jmax) < 0)
+        return 2;
+    const bool json = cli_flag(&a, "json");
+    if (cli_check_unused(&a, "smooth"))
+        return 2;
+    if (path == NULL || *path == '\0') {
+        fprintf(stderr, "error: smooth: --gcode FILE is required\n");
+        return 2;
+    }
+    if (!(isfinite(eps) && eps > 0.0)) {
+        fprintf(stderr, "error: smooth: --tolerance must be a finite number > 0\n");
+        return 1;
+    }
+    if (!(isfinite(amax) && amax > 0.0 && isfinite(jmax) && jmax > 0.0)) {
+        fprintf(stderr, "error: smooth: --amax and --jmax must be finite numbers > 0\n");
+        return 1;
+    }
+    sm_block *b = NULL;
+    int n = 0;
+    if (sm_read_gcode(path, &b, &n) != 0)
+        return 1;
+    sm_corner *c = n > 1 ? calloc((size_t)(n - 1), sizeof *c) : NULL;
+    if (n > 1 && c == NULL) {
+        free(b);
+        fprintf(stderr, "error: smooth: out of memory\n");
+        return 1;
+    }
+    const lsm_corner_params prm = {eps, 0.0, 0.0};
+    int n_smooth = 0, n_join = 0, n_stop = 0;
+    double max_dev = 0.0, max_dev_s = 0.0, kmax = 0.0, cmax = 0.0;
+    for (int i = 0; i + 1 < n; i++) {
+        sm_corner *k = &c[i];
+        const sm_block *p = &b[i], *q = &b[i + 1];
+        if (!p->feed || !q->feed) {
+            k->status = 2;
+            k->reason = "rapid";
+        } else if (p->stop_end) {
+            k->status = 2;
+            k->reason = "G61 exact stop";
+        } else if (p->rotary || q->rotary) {
+            k->status = 2;
+            k->reason = lsm_status_str(LSM_E_ROTARY);
+        } else {
+            lsm_status st = lsm_corner_smooth(&p->g, &q->g, &prm, &k->r);
+            if (st == LSM_OK) {
+                k->status = 0;
+                k->dev_sampled = sm_sampled_deviation(&p->g, &q->g, &k->r);
+                if (k->r.deviation_mm > max_dev)
+                    max_dev = k->r.deviation_mm;
+                if (k->dev_sampled > max_dev_s)
+                    max_dev_s = k->dev_sampled;
+                if (k->r.kappa_max_per_mm > kmax)
+                    kmax = k->r.kappa_max_per_mm;
+                if (k->r.sharpness_max_per_mm2 > cmax)
+                    cmax = k->r.sharpness_max_per_mm2;
+            } else if (st == LSM_E_COLLINEAR) {
+                k->status = 1;
+            } else {
+                k->status = 2;
+                k->reason = lsm_status_str(st);
+            }
+        }
+        n_smooth += k->status == 0;
+        n_join += k->status == 1;
+        n_stop += k->status == 2;
+    }
+    /* the smoothed path: trim the blocks, then check every joint passed without stopping */
+    sm_joint jt = {0, 0, 0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        lsm_geom g = b[i].g;
+        const double tb = (i > 0 && c[i - 1].status == 0) ? c[i - 1].r.trim2_mm : 0.0;
+        const double ta = (i + 1 < n && c[i].status == 0) ? c[i].r.trim1_mm : 0.0;
+        if (lsm_geom_trim_start(&g, tb) != LSM_OK || lsm_geom_trim_end(&g, ta) != LSM_OK) {
+            fprintf(stderr, "error: smooth: block at line %u: trims exceed its length\n", (unsigned)b[i].line);
+            free(b);
+            free(c);
+            return 1;
+        }
+        b[i].g = g;
+        if (g.kind == LSM_GEOM_ARC && b[i].feed) {
+            const double ka = lsm_geom_kappa(&g, 0.0);
+            if (ka > kmax)
+                kmax = ka;
+        }
+    }
+    for (int i = 0; i + 1 < n; i++) {
+        if (c[i].status == 0) {
+            sm_joint_check(&b[i].g, &c[i].r.trans[0], &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+            sm_joint_check(&c[i].r.trans[0], &c[i].r.trans[1], &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+            sm_joint_check(&c[i].r.trans[1], &b[i + 1].g, &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+        } else if (c[i].status == 1) {
+            sm_joint_check(&b[i].g, &b[i + 1].g, &jt, b[i + 1].line, 0.0);
+        }
+    }
+    const double f7 = kmax > 0.0 ? sqrt(amax / kmax) : HUGE_VAL;
+    const double f8 = cmax > 0.0 ? cbrt(jmax / cmax) : HUGE_VAL;
+    if (json) {
+        int first = 1;
+        printf("{");
+        sm_num("tolerance", eps, &first);
+        printf(", \"blocks\": %d, \"smoothed\": %d, \"joined\": %d, \"stops\": %d, \"corners\": [", n, n_smooth, n_join,
+               n_stop);
+        for (int i = 0; i + 1 < n; i++) {
+            const sm_corner *k = &c[i];
+            static const char *names[3] = {"smoothed", "joined", "stop"};
+            printf("%s{\"index\": %d, \"line\": %u, \"status\": \"%s\"", i ? ", " : "", i, (unsigned)b[i + 1].line,
+                   names[k->status]);
+            if (k->status == 2)
+                printf(", \"reason\": \"%s\"", k->reason);
+            if (k->status == 0) {
+                const lsm_corner_result *r = &k->r;
+                int f = 0;
+                sm_num("deviation", r->deviation_mm, &f);
+                sm_num("vertex_deviation", r->vertex_dev_mm, &f);
+                sm_num("path_deviation", r->path_dev_mm, &f);
+                sm_num("deviation_sampled", k->dev_sampled, &f);
+                sm_num("kappa_max", r->kappa_max_per_mm, &f);
+                sm_num("sharpness_max", r->sharpness_max_per_mm2, &f);
+                sm_num("trim_before", r->trim1_mm, &f);
+                sm_num("trim_after", r->trim2_mm, &f);
+                sm_num("angle_deg", r->delta_rad * 180.0 / LSM_PI, &f);
+                sm_num("feed_limit_eq7_mm_s", r->kappa_max_per_mm > 0 ? sqrt(amax / r->kappa_max_per_mm) : HUGE_VAL, &f);
+                sm_num("feed_limit_eq8_mm_s",
+                       r->sharpness_max_per_mm2 > 0 ? cbrt(jmax / r->sharpness_max_per_mm2) : HUGE_VAL, &f);
+                printf(", \"iterations\": %u, \"scales\": %u, \"limited\": %s, \"closed_form\": %s", (unsigned)r->iterations,
+                       (unsigned)r->scales, r->limited ? "true" : "false", r->closed_form ? "true" : "false");
+            }
+            printf("}");
+        }
+        printf("]");
+        sm_num("max_deviation", max_dev, &first);
+        sm_num("max_deviation_sampled", max_dev_s, &first);
+        sm_num("max_curvature_jump", jt.curv, &first);
+        sm_num("max_curvature_jump_rel", jt.curv_rel, &first);
+        sm_num("max_position_gap", jt.gap, &first);
+        sm_num("max_tangent_jump_rad", jt.tan, &first);
+        sm_num("kappa_max", kmax, &first);
+        sm_num("sharpness_max", cmax, &first);
+        sm_num("amax", amax, &first);
+        sm_num("jmax", jmax, &first);
+        sm_num("feed_limit_eq7_mm_s", f7, &first);
+        sm_num("feed_limit_eq8_mm_s", f8, &first);
+        sm_num("feed_limit_mm_s", f7 < f8 ? f7 : f8, &first);
+        sm_num("feed_limit_eq7_mm_min", 60.0 * f7, &first);
+        sm_num("feed_limit_eq8_mm_min", 60.0 * f8, &first);
+        printf("}\n");
+    } else {
+        printf("%d blocks, %d corners: %d smoothed, %d joined, %d stops (tolerance %g mm)\n", n, n > 0 ? n - 1 : 0,
+               n_smooth, n_join, n_stop, eps);
+        for (int i = 0; i + 1 < n; i++) {
+            const sm_corner *k = &c[i];
+            if (k->status == 0)
+                printf("  line %4u  %7.2f deg  dev %.6f mm (sampled %.6f)  kappa_max %.5g/mm  c_max %.5g/mm^2%s\n",
+                       (unsigned)b[i + 1].line, k->r.delta_rad * 180.0 / LSM_PI, k->r.deviation_mm, k->dev_sampled,
+                       k->r.kappa_max_per_mm, k->r.sharpness_max_per_mm2, k->r.limited ? "  (trim-limited)" : "");
+            else if (k->status == 2)
+                printf("  line %4u  stop: %s\n", (unsigned)b[i + 1].line, k->reason);
+        }
+        printf("max deviation %.6g mm (sampled %.6g), max curvature jump %.3g 1/mm (relative %.3g, at line %u; gap %.3g mm,"
+               " tangent %.3g rad)\n", max_dev, max_dev_s, jt.curv, jt.curv_rel, (unsigned)jt.worst_line, jt.gap, jt.tan);
+        printf("kappa_max %.6g 1/mm, c_max %.6g 1/mm^2: feed limits eq 7 %.1f mm/min, eq 8 %.1f mm/min\n", kmax, cmax,
+               60.0 * f7, 60.0 * f8);
+    }
+    free(b);
+    free(c);
+    return 0;
+}

@@ -32,6 +32,10 @@ const char *lsm_status_str(lsm_status st)
     case LSM_E_GAP: return "blocks do not connect";
     case LSM_E_ARC_GEOMETRY: return "inconsistent arc geometry";
     case LSM_E_TOL_UNREACHED: return "tolerance not reached within the segment capacity";
+    case LSM_E_PL_AXIS: return "planner: block moves an axis the machine does not have";
+    case LSM_E_PL_FINISHED: return "planner: block appended after the end of the program";
+    case LSM_E_PL_CAPACITY: return "planner: block storage too small";
+    case LSM_E_PL_OVERRIDE: return "feed override outside 0 .. 200 %";
     case LSM_E_GC_UNKNOWN_WORD: return "G-code: unknown word";
     case LSM_E_GC_MISSING_ARG: return "G-code: word without a number";
     case LSM_E_GC_SYNTAX: return "G-code: syntax error";

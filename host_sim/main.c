@@ -26,6 +26,7 @@ static const subcommand k_commands[] = {
     {"clothoid", cmd_clothoid, "clothoid eval|fit: evaluate a clothoid or fit one to a line (Shahzadeh IV)"},
     {"smooth", cmd_smooth, "G2 corner smoothing of a G-code file with clothoid pairs within a tolerance"},
     {"bench-clothoid", cmd_bench_clothoid, "host benchmark: ns per corner smoothed and per clothoid step"},
+    {"run", cmd_run, "run a G-code program through the look-ahead planner on a machine (setpoints, limits)"},
     /* further subcommands register here, one line each */
 };
 

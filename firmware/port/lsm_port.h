@@ -4,8 +4,8 @@
  * The core in firmware/ is pure computation: it never touches hardware, reads a clock or allocates. A port
  * connects it to a board. A port is one directory firmware/port/<name>/ with one C file (or a few) that
  * implements every function below. firmware/port/template/ is a blank port that builds: copy it to start.
- * Ports in this repository: template (blank), cortex-m (QEMU mps2-an386, Cortex-M4F); a Linux port
- * (SocketCAN, GPIO, timerfd) is planned.
+ * Ports in this repository: template (blank), cortex-m (QEMU mps2-an386, Cortex-M4F) and linux (SocketCAN, libgpiod
+ * GPIO, timerfd tick; used by the lissom-node daemon, docs/hil.md).
  *
  * What a board provides, exactly:
  *   1. CAN: send one classic CAN frame (11- or 29-bit id, 0..8 data bytes) without blocking, and poll for one

@@ -1,0 +1,97 @@
+/*
+ * interp.h: per-cycle interpolator of the look-ahead planner (lsm_interp_*): one call per control cycle gives
+ * every axis's absolute position setpoint (mm, rad).
+ *
+ * Model. The planner hands out pieces of the tangential profile s(t) (planner.h), each a list of phases whose
+ * lengths are whole cycles. Per cycle the interpolator
+ *   1. advances the piece's clock by one cycle (crossing phase ends, which lie anywhere between samples: cruises
+ *      have any length, ramp phases whole cycles) and evaluates the phase-local travel with the closed forms of
+ *      scurve.h,
+ *        s(tau) = v0 tau + a0 tau²/2 + J f(tau),  f = tau³/6 (constant jerk) or
+ *        f = tau³/12 -+ tau T²/(2 pi²) +- sin(pi tau / T) T³/(2 pi³)          (sin² rise / fall, Kombarov eq 15)
+ *      where sin(pi tau / T) comes from a rotation recurrence by pi / n1 per cycle, entered at every phase with
+ *      the ramp's entry angle (the samples of a ramp keep one offset to its phases, since their lengths are whole
+ *      cycles): four trigonometric calls per ramp, none per cycle. It takes the difference ds from the previous
+ *      sample (small numbers: no cancellation in float);
+ *   2. moves the path cursor (block, offset) by ds and evaluates the block there: a line directly (p0 + dir s),
+ *      an arc by rotating (cos phi, sin phi) by w ds with a short polynomial (re-anchored on entry and every 256
+ *      cycles), a clothoid with the incremental stepper of clothoid.h (lsm_clothoid_step).
+ * When a piece ends between two samples, the next one is planned at once and sampled at the rest of the cycle.
+ * Replanning happens only where a = 0: in cruises and at ramp starts. There the interpolator takes a new piece
+ * when the planner changed (blocks appended, override changed) or a feed hold was requested.
+ *
+ * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
+ * at once; both through the planner, so every change is a verified sin² ramp (jerk-limited). 0 % is a feed hold.
+ * Feed hold: at the next point where a = 0 the machine decelerates along the path with one ramp to rest (verified
+ * against every block it crosses), then waits; resume starts again from rest on the path.
+ * Ends: a stop (exact stop, end of buffer, end of program) puts the cursor exactly on its point, and the last
+ * setpoint of the program is the programmed end (planner's tail position) bit for bit. An integer-count drive
+ * converts each setpoint with one rounding, round(x * counts_per_mm): the last one is then the count of the
+ * programmed end, i.e. 0 counts error by construction (no accumulated travel is converted).
+ * Buffer underrun: the current piece already plans a stop at the end of the buffer (planner.h invariants), so the
+ * machine stops cleanly there and restarts from rest when blocks arrive.
+ *
+ * Units: mm, s, rad.
+ */
+#ifndef LSM_INTERP_H
+#define LSM_INTERP_H
+
+#include "clothoid.h"
+#include "planner.h"
+
+typedef enum lsm_interp_state {
+    LSM_INTERP_IDLE = 0, /* at rest, waiting for blocks (start, or underrun) */
+    LSM_INTERP_RUN = 1,  /* moving */
+    LSM_INTERP_HELD = 2, /* at rest after a feed hold (or 0 % override) */
+    LSM_INTERP_DONE = 3  /* at rest on the end of a finished program */
+} lsm_interp_state;
+
+typedef struct lsm_interp {
+    lsm_planner *pl;
+    lsm_piece pc;                /* the piece being run */
+    uint8_t running;             /* pc is valid */
+    uint8_t state;               /* lsm_interp_state */
+    uint8_t hold_req;            /* feed hold requested (or 0 % override) */
+    uint8_t ovr_zero;            /* the hold comes from a 0 % override */
+    uint8_t phase;               /* current phase of pc */
+    uint8_t gkind;               /* kind of the current block */
+    uint16_t anchor;             /* cycles since the arc was re-anchored */
+    uint32_t gen;                /* planner generation of pc */
+    lsm_real tau;                /* time into the current phase at the last sample */
+    lsm_real sloc;               /* travel into the current phase at the last sample */
+    lsm_real rc, rs;             /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
+    lsm_real ce[2], se[2];       /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
+    lsm_real ee[2];              /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
+    lsm_real cd[2], sd[2];       /* per ramp: cos, sin of pi / n1 (one cycle) */
+    lsm_real v_mm_s;             /* feed at the last sample */
+    uint32_t blk;                /* path cursor: block id ... */
+    lsm_real off_mm;             /* ... and offset in it */
+    uint32_t hz_blk;             /* end of the current ramp (commitment horizon) */
+    lsm_real hz_off;
+    lsm_real ac, as, aw;         /* arc: cos phi, sin phi, dphi/ds */
+    lsm_clothoid_stepper cs;     /* clothoid stepper */
+    lsm_real pos[LSM_MAX_AXES];  /* last setpoint */
+    lsm_real ovr;                /* requested override factor */
+    uint64_t cycles;             /* cycles stepped */
+    uint32_t replans;            /* pieces taken while moving (replanning) */
+    uint32_t plan_errors;        /* plan_piece calls that returned an error */
+} lsm_interp;
+
+/* Start at rest at the planner's start position. Errors: LSM_E_NULL. */
+lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl);
+
+/* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. */
+lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
+
+/* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first). */
+void lsm_interp_hold(lsm_interp *ip);
+void lsm_interp_resume(lsm_interp *ip);
+
+/* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE. */
+lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real factor);
+
+/* Current feed along the path (mm/s) and state. */
+lsm_real lsm_interp_feed(const lsm_interp *ip);
+lsm_interp_state lsm_interp_state_of(const lsm_interp *ip);
+
+#endif /* LSM_INTERP_H */

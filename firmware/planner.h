@@ -1,0 +1,293 @@
+/*
+ * planner.h: look-ahead velocity planner over a ring of path blocks (lsm_planner_*).
+ *
+ * Model. The path is a chain of blocks (lines in up to 6 axes, circular/helical arcs, and the clothoid pairs
+ * that corner smoothing inserts between them, geom.h / corner.h), parametrised by arc length s. The motion along
+ * it is one tangential profile s(t), built from "pieces" that join with a = j = 0:
+ *
+ *   v ^          node                          node                 node (stop)
+ *     |           :      ramp A   cruise vc      :  ramp A    ramp B   :
+ *     |           :       ____________________   :    _______          :
+ *     |   ramp B  :      /                    \  :   /       \         :
+ *     |  \________:_____/                      \_:__/         \        :
+ *     |           : lead cruise (v0)     ramp B  :             \_______:
+ *     +-----------+------------------------------+---------------------+--> s
+ *       piece k-1           piece k                    piece k+1
+ *
+ * Every piece is [lead cruise at v0][ramp A: v0 -> vc][cruise vc][ramp B: vc -> v1][trail cruise at v1]. Each
+ * ramp is a sin² velocity change with the strict whole-cycle rule of scurve.h (Kombarov eqs 17, 22-37, every
+ * interval a whole number of cycles (eq 33), J_P corrected by eq 34); the cruises take any length, so a ramp may
+ * start anywhere and every piece ends exactly on its node (the interpolator samples the profile at the cycle
+ * instants, carrying the fraction of a cycle from piece to piece). A ramp may span any number of blocks: nothing
+ * ties velocity changes to block boundaries, so dense CAM code (0.05-0.2 mm segments) accelerates over hundreds
+ * of blocks in one ramp. Nodes (where pieces meet) sit at the valleys of the speed-limit profile, at significant
+ * drops of it, at exact stops, and at the end of the buffer.
+ *
+ * Limits. The setpoint of axis i is q_i(s(t)) and (Beudaert eqs 1-3, with the last term of eq 3 as q_s s''')
+ *     q'   = q_s v,   q'' = q_ss v² + q_s a,   q''' = q_sss v³ + 3 q_ss v a + q_s j        (v, a, j of s(t))
+ * Per block, bounds Q1_i >= |q_s,i|, Q2_i >= |q_ss,i|, Q3_i >= |q_sss,i| over the whole block are computed from
+ * its geometry (line: dir; arc: r w, r w², r w³ along the swept angle range; clothoid: T, kappa N,
+ * c N - kappa² T along the turning range) and reduced to six numbers per block
+ *     alpha_a = max_i Q1_i/A_i   beta_a = max_i Q2_i/A_i
+ *     alpha_j = max_i Q1_i/J_i   beta_j = max_i Q2_i/J_i   gamma_j = max_i Q3_i/J_i    alpha_s = max_i Q1_i/S_i
+ * so that, for every axis at once, within that block
+ *     |a| <= (1 - beta_a v²) / alpha_a,   |j| <= (1 - gamma_j v³ - 3 beta_j v |a|) / alpha_j,
+ *     tangential snap <= 1 / alpha_s                                                       (budgets)
+ * hold every axis's acceleration and jerk (and Q1_i v <= V_i for velocity). The speed cap of a block is
+ *     cap = min(F * override, V_i / Q1_i, sqrt(rho / beta_a), cbrt(rho / gamma_j))
+ * (rho = cap_margin < 1 leaves part of A and J for changing speed at the cap). For a path whose normal may point
+ * along any axis this is eq 7 (sqrt(a/kappa)) and eq 8 (cbrt(j/c), plus the kappa² v³ term eq 8 drops); explicit
+ * path limits (path_a_max, path_j_max) add eqs 7 and 8 literally as one more "axis".
+ * Every ramp is verified against these budgets before it is used: it is cut into sub-intervals (phase
+ * boundaries and quarters/eighths of each phase, where v and |a| are monotone), and for every block that a
+ * sub-interval touches, the largest v, |a|, |j| of the sub-interval must fit that block's budgets and cap. A ramp
+ * that does not fit is re-planned with smaller tangential limits, or moved. Hence the true (continuous) axis
+ * v, a and j stay within the limits, and so do the backward differences of the setpoints (Beudaert eq 6): the
+ * third difference is the jerk averaged with a non-negative kernel. Axis snap is only held in its tangential part
+ * (q_s s''''); the other snap terms are not bounded.
+ *
+ * Look-ahead invariants.
+ *  - Backward pass: from the end of the buffer (speed 0) back to the interpolator, every node gets W, the highest
+ *    speed with a = 0 from which one ramp (with cruises) reaches the next node's W, verified pointwise. So from
+ *    every node at or below its W the machine can stop within the buffered blocks: a buffer underrun is a clean
+ *    stop. The pass stops as soon as a node's W does not change (bounded, incremental replanning).
+ *  - Forward step (when the interpolator needs the next piece): v1 = min(W of the next node, what one ramp from v0
+ *    can reach), then the highest cruise vc whose ramps verify. Only the current ramp is ever committed: during
+ *    cruises the interpolator re-plans when blocks arrive or the override changes.
+ *  - Every piece ends exactly on its end point, so stops (exact stop, end of buffer, end of program) land exactly
+ *    on their point and the next piece starts exactly where the certificate of its node was computed.
+ *
+ * Blocks and corners. A corner between two blocks is replaced by a G2 clothoid pair (corner.h) within the
+ * tolerance in force (G64 P, lsm_planner_move.tol_mm > 0); with tol_mm = 0 (G61) or where no transition exists
+ * (reversal, rotary axes, non-planar) the machine stops at the corner. Only the last block of the buffer is ever
+ * modified (its end trimmed), and only beyond the interpolator's commitment horizon.
+ * Dense G1 polylines are first fitted with arcs (arcfit.h) within fit_share of the tolerance where the per-vertex
+ * transitions would limit the feed; those points wait in the planner until their run ends (or flush / finish).
+ * Append validates its input first and changes nothing on error: no accepted block is ever lost.
+ *
+ * Memory: caller-owned block storage (lsm_pblock, 96 bytes in the float build) and the lsm_planner object.
+ * Units: mm, s, rad (rotary axes), and their derivatives; a rotary-only line uses rad as its path unit.
+ */
+#ifndef LSM_PLANNER_H
+#define LSM_PLANNER_H
+
+#include "arcfit.h"
+#include "geom.h"
+#include "scurve.h"
+
+/* Smallest block storage accepted (a corner needs three slots). */
+#define LSM_PLANNER_MIN_BLOCKS 8
+/* Phases of one piece: lead cruise, ramp A (7), cruise, ramp B (7), trail cruise. */
+#define LSM_PIECE_PHASES 17
+
+/* Defaults of lsm_planner_config (each overridable from a project config). */
+#ifndef LSM_PLANNER_CAP_MARGIN
+#define LSM_PLANNER_CAP_MARGIN 0.9 /* rho: share of A and J the path's curvature may use at the cap */
+#endif
+#ifndef LSM_PLANNER_NODE_HYST
+#define LSM_PLANNER_NODE_HYST 0.05 /* a valley is a node if it is this much (relative) below its surroundings */
+#endif
+#ifndef LSM_PLANNER_NODE_DROP
+#define LSM_PLANNER_NODE_DROP 0.25 /* a drop of the cap by this much (relative) from one block to the next is a node */
+#endif
+#ifndef LSM_PLANNER_FIT_SHARE
+#define LSM_PLANNER_FIT_SHARE 0.5 /* share of the blend tolerance for fitting arcs through dense polylines */
+#endif
+#ifndef LSM_PLANNER_TRIM_SHARE
+#define LSM_PLANNER_TRIM_SHARE 0.5 /* largest part of a block one corner transition may take */
+#endif
+
+/* Block flags. */
+enum {
+    LSM_PB_STOP = 1u,   /* the machine stops at the start of this block (v = 0) */
+    LSM_PB_NODE = 2u,   /* a node of the look-ahead starts at this block (w_mm_s is its W) */
+    LSM_PB_CORNER = 4u, /* a clothoid inserted by corner smoothing */
+    LSM_PB_RAPID = 8u   /* G0 */
+};
+
+/* Limits of one axis, in its unit u (mm, or rad for A B C): u/s, u/s², u/s³, u/s⁴. */
+typedef struct lsm_planner_axis {
+    lsm_real v_max;
+    lsm_real a_max;
+    lsm_real j_max;
+    lsm_real snap_max;
+} lsm_planner_axis;
+
+typedef struct lsm_planner_config {
+    lsm_real cycle_s;                     /* control cycle */
+    uint8_t axis_mask;                    /* bit k: axis k (X Y Z A B C) exists; the others must never move */
+    lsm_planner_axis axis[LSM_MAX_AXES];  /* limits of the existing axes */
+    lsm_real cap_margin;                  /* rho in (0, 1) */
+    lsm_real path_a_max_mm_s2;            /* optional tangential-frame limits (eqs 7, 8); 0: none */
+    lsm_real path_j_max_mm_s3;
+    lsm_real node_hyst;                   /* [0, 1) */
+    lsm_real node_drop;                   /* (0, 1) */
+    lsm_real trim_share;                  /* (0, 0.5] */
+    lsm_real fit_share;                   /* [0, 1): share of the blend tolerance used to fit arcs through dense G1
+                                             polylines (arcfit.h); 0 turns fitting off */
+} lsm_planner_config;
+
+/* One look-ahead block (caller storage). */
+typedef struct lsm_pblock {
+    lsm_geom g;               /* geometry (geom.h) */
+    lsm_real feed_mm_s;       /* programmed feed (path units / s); LSM_REAL_MAX for rapids */
+    lsm_real cap_geo_mm_s;    /* speed cap from the axis limits and the geometry (no feed, no override) */
+    lsm_real w_mm_s;          /* W of the node starting here (backward pass), when LSM_PB_NODE */
+    uint32_t seq;             /* the caller's tag (source line) */
+    uint16_t coef[6];         /* alpha_a, beta_a, alpha_j, beta_j, gamma_j, alpha_s as bfloat16, rounded up */
+    uint8_t flags;            /* LSM_PB_* */
+    uint8_t reserved;
+} lsm_pblock;
+
+/* What comes with a block. */
+typedef struct lsm_planner_move {
+    lsm_real feed_mm_s;   /* programmed feed > 0 (mm/s; rad/s for a rotary-only line); ignored for rapids */
+    lsm_real tol_mm;      /* corner at the END of this block: > 0 blends within this deviation (G64 P),
+                             0 stops exactly there (G61) */
+    uint32_t seq;         /* tag (e.g. the source line), reported back */
+    uint8_t rapid;        /* G0: feed = the axes' v_max */
+} lsm_planner_move;
+
+/* One phase of a piece: a sin² jerk rise or fall, constant jerk, or a cruise. */
+typedef struct lsm_piece_phase {
+    lsm_real T_s;        /* duration: whole cycles for ramp phases (Kombarov eq 33), any length for cruises */
+    lsm_real len_mm;     /* distance travelled in it */
+    lsm_real jerk_mm_s3; /* jerk amplitude (0 for cruises and T4) */
+    uint32_t n_cycles;   /* T_s in cycles for ramp phases, 0 for cruises */
+    uint8_t shape;       /* lsm_phase_shape */
+    uint8_t reserved[3];
+} lsm_piece_phase;
+
+/* One piece of the tangential profile, ready for the interpolator. It ends exactly on its end point. */
+typedef struct lsm_piece {
+    uint32_t blk;                          /* id of the block where it starts */
+    lsm_real off_mm;                       /* offset into that block */
+    lsm_real len_mm;                       /* distance to its end (a node, the end of the buffer, or a hold) */
+    lsm_real v0_mm_s, v1_mm_s, vc_mm_s;
+    uint32_t end_blk;                      /* it ends at the start of this block (tail: the end of the buffer) */
+    lsm_real T_s;                          /* duration */
+    uint8_t stop;                          /* ends with v = 0 */
+    uint8_t hold;                          /* a feed-hold stop (ends anywhere) */
+    uint8_t reserved[2];
+    lsm_piece_phase ph[LSM_PIECE_PHASES];  /* lead cruise, ramp A (7), cruise, ramp B (7), trail cruise */
+    lsm_kin st[LSM_PIECE_PHASES];          /* state at each phase start (s piece-relative) */
+} lsm_piece;
+
+typedef struct lsm_planner_stats {
+    uint32_t appended;        /* blocks accepted by append */
+    uint32_t corners;         /* corners smoothed with a clothoid pair */
+    uint32_t corner_stops;    /* corners where the machine must stop */
+    uint32_t pieces;          /* pieces planned */
+    uint32_t plan_fallbacks;  /* pieces that needed the conservative fallback (should stay 0) */
+    uint32_t checks;          /* ramp verifications (cost indicator) */
+    uint32_t bp_nodes;        /* node evaluations in backward passes */
+} lsm_planner_stats;
+
+typedef struct lsm_planner {
+    lsm_planner_config cfg;
+    lsm_pblock *blk;
+    uint32_t cap;               /* storage size */
+    uint32_t head_slot;         /* storage slot of block id `head` */
+    uint32_t head, tail;        /* ids of the blocks held: [head, tail) */
+    lsm_real tail_pos[LSM_MAX_AXES];  /* geometric end of the last block (where the next one starts) */
+    lsm_real tail_prog[LSM_MAX_AXES]; /* programmed end of the last block (the exact end of the program) */
+    lsm_real tail_tol_mm;       /* tolerance for the corner at the end of the last block */
+    uint8_t tail_rotary;        /* the last block moves A B C */
+    uint8_t finished;           /* lsm_planner_finish was called */
+    uint8_t full_pass;          /* the next backward pass must cover the whole buffer */
+    uint8_t reserved;
+    lsm_real ovr_near, ovr_far; /* feed override (factor) for blocks below / from ovr_switch */
+    uint32_t ovr_switch;
+    uint32_t horizon_blk;       /* the interpolator is committed up to here (block id, offset) */
+    lsm_real horizon_off;
+    uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
+    /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */
+    lsm_arcfit_pt fit_pt[LSM_ARCFIT_MAX];
+    uint32_t fit_n;
+    lsm_real fit_feed, fit_tol;
+    lsm_real tail_fit_err;      /* fitting error of the last block (its corners get the rest of the tolerance) */
+    lsm_real tail_n[3];         /* the last block is a fitted arc with this plane normal (tail_arc) */
+    uint8_t tail_arc;
+    uint8_t reserved2[3];
+    lsm_planner_stats stats;
+} lsm_planner;
+
+/* Defaults: 1 ms cycle, X Y Z at 250 mm/s, 3000 mm/s², 60000 mm/s³, 1.2e7 mm/s⁴, and the macros above. */
+void lsm_planner_default_config(lsm_planner_config *cfg);
+
+/*
+ * Initialise with caller storage of `capacity` blocks and the start position (LSM_MAX_AXES values, mm / rad).
+ * Errors: LSM_E_NULL, LSM_E_CYCLE, LSM_E_LIMIT (an existing axis's limit <= 0, or a path limit < 0),
+ * LSM_E_NAN, LSM_E_INF, LSM_E_ARG (axis_mask 0 or above 0x3F, cap_margin / node_hyst / node_drop / trim_share
+ * outside their ranges), LSM_E_PL_CAPACITY (capacity < LSM_PLANNER_MIN_BLOCKS).
+ */
+lsm_status lsm_planner_init(lsm_planner *pl, const lsm_planner_config *cfg, lsm_pblock *storage, uint32_t capacity,
+                            const lsm_real start[LSM_MAX_AXES]);
+
+/*
+ * Append a straight line from the end of the last block to `end` (LSM_MAX_AXES values).
+ * Errors (nothing is changed): LSM_E_NULL, LSM_E_NAN, LSM_E_INF (end, feed or tolerance not finite),
+ * LSM_E_NEG_FEED (feed <= 0 and not rapid), LSM_E_TOLERANCE (tol < 0), LSM_E_PL_AXIS (an axis outside the mask
+ * moves), LSM_E_ZERO_LENGTH, LSM_E_RANGE, LSM_E_FULL (fewer than 3 free slots), LSM_E_PL_FINISHED.
+ */
+lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES], const lsm_planner_move *mv);
+
+/*
+ * Append a circular or helical arc from the end of the last block to `end` (X Y Z) around `centre` in a G17/18/19
+ * plane, dir = +1 (G3) or -1 (G2), plus `turns` full turns (geom.h). A B C stay where they are.
+ * Errors: as lsm_planner_append_line, plus LSM_E_ARG and LSM_E_ARC_GEOMETRY (geom.h).
+ */
+lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3], lsm_geom_plane plane,
+                                  int dir, uint32_t turns, const lsm_planner_move *mv);
+
+/* End of program: the last block ends with an exact stop on its programmed end point (pending points are
+ * emitted first). Errors: LSM_E_NULL, LSM_E_FULL (room for the pending points is missing: run the interpolator
+ * and call again). */
+lsm_status lsm_planner_finish(lsm_planner *pl);
+
+/* Emits the G1 points held for fitting (a caller that pauses its stream calls this so that the machine does not
+ * stop short of them). Errors: LSM_E_NULL, LSM_E_FULL. */
+lsm_status lsm_planner_flush(lsm_planner *pl);
+
+/* Free block slots (an append needs up to 3). */
+uint32_t lsm_planner_free(const lsm_planner *pl);
+/* Blocks held. */
+uint32_t lsm_planner_count(const lsm_planner *pl);
+/* Block by id (NULL outside [head, tail)). */
+const lsm_pblock *lsm_planner_block(const lsm_planner *pl, uint32_t id);
+/* Speed cap of a block with the current override (mm/s). */
+lsm_real lsm_planner_block_cap(const lsm_planner *pl, uint32_t id);
+
+/*
+ * Feed override factor 0 .. 2. Decreases take effect beyond the distance the machine needs to slow down from
+ * v_now_mm_s (at block cur_blk); increases at once. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
+ * (The interpolator calls this; 0 is handled there as a feed hold.)
+ */
+lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real factor, uint32_t cur_blk, lsm_real v_now_mm_s);
+
+/* ---- interface for the interpolator ---- */
+
+typedef enum lsm_piece_mode {
+    LSM_PIECE_NORMAL = 0, /* to the next node at the best feed */
+    LSM_PIECE_HOLD = 1    /* stop as soon as possible (feed hold) */
+} lsm_piece_mode;
+
+/*
+ * Plan the piece that starts at (blk, off_mm) with speed v0_mm_s (a = 0 there). Runs the pending backward pass
+ * first. Errors: LSM_E_NULL, LSM_E_EMPTY (nothing to move: at the end of the buffer), LSM_E_INFEASIBLE (HOLD:
+ * no stop fits yet; follow the current plan and retry), LSM_E_INTERNAL (no verified plan; a fallback piece that
+ * stops is returned and counted in stats.plan_fallbacks).
+ */
+lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
+                                  lsm_piece_mode mode, lsm_piece *out);
+
+/* The interpolator is committed up to (blk, off_mm): the planner modifies nothing before that. */
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm);
+
+/* Blocks before id `blk` are no longer needed (their slots are freed). */
+void lsm_planner_release(lsm_planner *pl, uint32_t blk);
+
+/* Runs the backward pass now (append runs it too; exposed for benchmarks). */
+void lsm_planner_update(lsm_planner *pl);
+
+#endif /* LSM_PLANNER_H */

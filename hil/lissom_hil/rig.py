@@ -1,0 +1,418 @@
+"""The HIL rig: a Lissom node on a CAN bus, driven by the PyPI `canopen` master (BaseNode402 + hil/lissom.eds).
+
+Two kinds of rig (pytest --rig, see hil/tests/conftest.py):
+  vcan   the rig starts build/bin/lissom-node on vcan0 for every test (fresh state, per-cycle trace available);
+  can0   a real CAN interface; by default the node is an external board (the rig resets it with NMT and uses
+         only what CANopen shows); --rig-local also starts lissom-node on that interface.
+
+    rig = Rig(RigConfig(kind="vcan")); rig.open(); rig.start()
+    rig.operational(); rig.enable(0, mode="PROFILED POSITION")
+    rig.set_profile(0, v=50, a=500, j=1e4, snap=1e6, profile_type=1)    # mm units, converted with 0x2001
+    rig.pp_move(0, 20.0)                                                 # handshake, waits for target reached
+    tr = rig.trace()                                                     # lissom_hil.trace.Trace (vcan only)
+    rig.stop(); rig.close()
+
+Command line:  python -m lissom_hil.rig plot DIR   makes PNGs (lissom_hil.plot) of every run CSV under DIR.
+"""
+import json
+import os
+import shutil
+import socket
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from typing import Optional
+
+import canopen
+from canopen.profiles.p402 import BaseNode402
+
+from . import node_proc
+from .frames import FrameLog
+from .trace import Trace
+
+ROOT = node_proc.ROOT
+EDS = os.path.join(ROOT, "hil", "lissom.eds")
+AXIS_STEP = 0x800
+
+# statusword bits (CiA 402)
+SW_TARGET_REACHED = 0x0400
+SW_ACK = 0x1000
+SW_FAULT = 0x0008
+SW_STATE_MASK = 0x6F
+SW_OPERATION_ENABLED = 0x27
+
+# SDO response timeout of the master: generous, because under emulation the Python threads that read the
+# bus can be late by a few hundred ms (the node answers within a cycle)
+SDO_TIMEOUT_S = 2.0
+
+# the node's built-in machine (host_sim/node/node_app.c): used when no machine file is given
+BUILTIN_LIMITS = {"v": 250.0, "a": 3000.0, "j": 60000.0, "snap": 1.18e7}
+
+
+@dataclass
+class RigConfig:
+    kind: str = "vcan"                 # vcan | can0
+    iface: Optional[str] = None        # default vcan0 / can0
+    node_id: int = 1
+    local: Optional[bool] = None       # start lissom-node (default: True on vcan, False on can0)
+    machine: Optional[str] = None      # machine file for the local node (limits for the checks)
+    axes: int = 3
+    out_dir: str = os.path.join(ROOT, "out", "hil")
+    node_args: list = field(default_factory=list)
+    rt_prio: int = 50                  # local node: SCHED_FIFO priority (0 = normal scheduling)
+
+    def resolved(self):
+        c = RigConfig(**self.__dict__)
+        if c.iface is None:
+            c.iface = "vcan0" if c.kind == "vcan" else c.kind
+        if c.local is None:
+            c.local = c.kind == "vcan"
+        return c
+
+
+class Rig:
+    def __init__(self, cfg: RigConfig):
+        self.cfg = cfg.resolved()
+        self.network = None
+        self.frames = None
+        self.node = None
+        self.proc = None
+        self.trace_path = None
+        self.home = [0] * 6
+        self.test_dir = self.cfg.out_dir
+        self._hb = None
+        self._sync_period = None
+        self._pdo_ready = False
+        self._tmp = tempfile.mkdtemp(prefix="lissom-hil-")
+        self.axis_names = "XYZUVW"
+        self.limits = [dict(BUILTIN_LIMITS, cpm=1000.0) for _ in range(6)]
+        if self.cfg.machine:
+            with open(self.cfg.machine) as f:
+                m = json.load(f)
+            self.axis_names = "".join(a["name"] for a in m["axes"])
+            for k, a in enumerate(m["axes"]):
+                self.limits[k] = {"v": a["v_max_mm_s"], "a": a["a_max_mm_s2"], "j": a["j_max_mm_s3"],
+                                  "snap": a["snap_max_mm_s4"], "cpm": 1000.0}
+
+    # ---- session -------------------------------------------------------------------------------------
+    def open(self):
+        self.frames = FrameLog(self.cfg.iface).start()
+        self.network = canopen.Network()
+        # the master only listens to what it uses (SDO responses, heartbeat, EMCY, TPDO1 with the statusword):
+        # under emulation every frame costs Python milliseconds; telemetry is decoded from the capture instead
+        nid = self.cfg.node_id
+        flt = [{"can_id": base + nid, "can_mask": 0x7FF, "extended": False} for base in (0x580, 0x700, 0x080, 0x180)]
+        self.network.connect(interface="socketcan", channel=self.cfg.iface, can_filters=flt)
+        sock = getattr(self.network.bus, "socket", None)
+        if sock is not None:  # the master's receive queue: large, for the same reason as the capture's
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, getattr(socket, "SO_RCVBUFFORCE", 33), 8 << 20)
+            except OSError:
+                pass
+        return self
+
+    def close(self):
+        if self.node is not None or self.proc is not None:
+            self.stop()
+        if self.network is not None:
+            self.network.disconnect()
+            self.network = None
+        if self.frames is not None:
+            self.frames.stop()
+            self.frames = None
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def set_test_dir(self, name):
+        self.test_dir = os.path.join(self.cfg.out_dir, name)
+        os.makedirs(self.test_dir, exist_ok=True)
+        return self.test_dir
+
+    def out(self, name):
+        os.makedirs(self.test_dir, exist_ok=True)
+        return os.path.join(self.test_dir, name)
+
+    @property
+    def node_id(self):
+        return self.cfg.node_id
+
+    @property
+    def local(self):
+        return self.cfg.local
+
+    # ---- device lifecycle ----------------------------------------------------------------------------
+    def start(self, extra=(), trace=True, timeout=10.0):
+        """Starts the device under test and waits for its boot-up frame: a fresh lissom-node (local), or an NMT
+        reset of the board. Returns the boot-up frame."""
+        mark = self.frames.mark()
+        if self.cfg.local:
+            # the trace goes to a local temporary file (the artefact directory may be a slow 9p share in
+            # the VM); stop() copies it next to the other artefacts
+            self.trace_path = os.path.join(self._tmp, "trace-%d.bin" % os.getpid()) if trace else None
+            args = list(self.cfg.node_args) + list(extra)
+            if self.cfg.rt_prio > 0 and "--rt" not in args:
+                args += ["--rt", str(self.cfg.rt_prio)]
+            if self.cfg.machine:
+                args += ["--machine", self.cfg.machine]
+            if "--axes" not in args and not self.cfg.machine:
+                args += ["--axes", str(self.cfg.axes)]
+            self.proc = node_proc.NodeProcess(node_proc.find_node_binary(), self.cfg.iface, self.cfg.node_id,
+                                              trace=self.trace_path, extra=args, log_path=self.out("node.log"))
+            self.proc.start()
+        else:
+            self.network.send_message(0x000, [0x81, self.cfg.node_id])
+        boot = self.frames.wait(lambda f: f.id == 0x700 + self.cfg.node_id and f.data == b"\x00", timeout, mark)
+        if boot is None:
+            raise RuntimeError("no boot-up frame from node %d on %s" % (self.cfg.node_id, self.cfg.iface))
+        self.node = BaseNode402(self.cfg.node_id, EDS)
+        self.node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
+        self.network.add_node(self.node)
+        self._pdo_ready = False
+        # positions are relative to where the axes are now (a board keeps its positions across NMT resets)
+        self.home = [self.read(0x6062, axis=k) for k in range(self.cfg.axes)]
+        return boot
+
+    def stop(self):
+        """Stops SYNC / heartbeat production, detaches the node and stops the local daemon. Returns its exit
+        code (None for an external board)."""
+        self.stop_sync()
+        self.stop_heartbeat()
+        if self.node is not None:
+            try:
+                del self.network[self.cfg.node_id]
+            except KeyError:
+                pass
+            self.node = None
+        rc = None
+        if self.proc is not None:
+            rc = self.proc.stop()
+            self.proc = None
+            if self.trace_path and os.path.exists(self.trace_path):
+                shutil.copyfile(self.trace_path, self.out("trace.bin"))
+        return rc
+
+    def restart(self, extra=(), trace=True):
+        self.stop()
+        return self.start(extra, trace)
+
+    def require_local(self, pytest_mod, why="needs the local lissom-node (trace, simulated inputs)"):
+        if not self.cfg.local:
+            pytest_mod.skip(why)
+
+    # ---- NMT -----------------------------------------------------------------------------------------
+    def nmt(self, command):
+        """command: 'OPERATIONAL', 'STOPPED', 'PRE-OPERATIONAL', 'RESET', 'RESET COMMUNICATION'."""
+        self.node.nmt.send_command({"OPERATIONAL": 0x01, "STOPPED": 0x02, "PRE-OPERATIONAL": 0x80,
+                                    "RESET": 0x81, "RESET COMMUNICATION": 0x82}[command])
+
+    def wait_heartbeat(self, state_byte, timeout=2.0, since=None):
+        since = self.frames.mark() if since is None else since
+        return self.frames.wait(lambda f: f.id == 0x700 + self.cfg.node_id and f.data == bytes([state_byte]),
+                                timeout, since)
+
+    def operational(self):
+        mark = self.frames.mark()
+        self.nmt("OPERATIONAL")
+        if self.wait_heartbeat(0x05, 2.0, mark) is None:
+            raise RuntimeError("node did not report OPERATIONAL")
+
+    # ---- SDO -----------------------------------------------------------------------------------------
+    def read(self, index, sub=None, axis=0):
+        var = self.node.sdo[index + AXIS_STEP * axis]
+        return (var if sub is None else var[sub]).raw
+
+    def write(self, index, value, sub=None, axis=0):
+        var = self.node.sdo[index + AXIS_STEP * axis]
+        (var if sub is None else var[sub]).raw = value
+
+    def abort_code(self, fn):
+        """Runs fn(); returns the SDO abort code it raised, or 0."""
+        try:
+            fn()
+            return 0
+        except canopen.SdoAbortedError as e:
+            return e.code
+
+    # ---- CiA 402 -------------------------------------------------------------------------------------
+    MODES = {"PROFILED POSITION": 1, "CYCLIC SYNCHRONOUS POSITION": 8, "PATH": -1, "NO MODE": 0}
+
+    def statusword(self, axis=0):
+        return self.read(0x6041, axis=axis)
+
+    def state_of(self, axis=0):
+        sw = self.statusword(axis)
+        for name, (mask, bits) in canopen.profiles.p402.State402.SW_MASK.items():
+            if sw & mask == bits:
+                return name
+        return "UNKNOWN"
+
+    def wait_sw(self, axis, mask, value, timeout=5.0, poll=0.005):
+        t_end = time.monotonic() + timeout
+        while True:
+            sw = self.statusword(axis)
+            if sw & mask == value:
+                return sw
+            if time.monotonic() > t_end:
+                raise TimeoutError("axis %d statusword 0x%04X: waited for &0x%04X == 0x%04X" % (axis, sw, mask, value))
+            time.sleep(poll)
+
+    def enable(self, axis=0, mode="PROFILED POSITION"):
+        """Brings the axis to OPERATION ENABLED in `mode`. Axis 0 goes through canopen's BaseNode402 (its PDO
+        configuration read from the node, op_mode, the state machine); the other axes have no PDOs of their
+        own by default, so their controlword is written by SDO with the same CiA 402 sequence."""
+        code = self.MODES[mode]
+        if axis == 0 and code > 0:
+            if not self._pdo_ready:
+                self.node.setup_402_state_machine(read_pdos=True)
+                self._pdo_ready = True
+            self.node.op_mode = mode
+            self.node.state = "OPERATION ENABLED"
+        else:
+            self.write(0x6060, code, axis=axis)
+            for cw in (0x06, 0x07, 0x0F):
+                self.write(0x6040, cw, axis=axis)
+        self.wait_sw(axis, SW_STATE_MASK, SW_OPERATION_ENABLED, 2.0)
+        t_end = time.monotonic() + 2.0
+        while self.read(0x6061, axis=axis) != code:
+            if time.monotonic() > t_end:
+                raise RuntimeError("axis %d: mode display is not %s" % (axis, mode))
+            time.sleep(0.01)
+
+    def controlword(self, axis, value):
+        self.write(0x6040, value, axis=axis)
+
+    def cpm(self, axis=0):
+        return self.limits[axis]["cpm"]
+
+    def set_profile(self, axis=0, v=None, a=None, d=None, j=None, snap=None, profile_type=None, quick_decel=None):
+        """Profile objects in mm units (converted with the axis's counts per mm)."""
+        c = self.cpm(axis)
+        for idx, val in ((0x6081, v), (0x6083, a), (0x6084, d if d is not None else a), (0x2060, j),
+                         (0x2061, snap), (0x6085, quick_decel)):
+            if val is not None:
+                self.write(idx, int(round(val * c)), axis=axis)
+        if profile_type is not None:
+            self.write(0x6086, profile_type, axis=axis)
+
+    def counts(self, axis, mm):
+        """Absolute counts of a position given in mm from the axis's home (its position when the test started)."""
+        return self.home[axis] + int(round(mm * self.cpm(axis)))
+
+    def demand(self, axis=0):
+        """Position demand 0x6062 in counts from home."""
+        return self.read(0x6062, axis=axis) - self.home[axis]
+
+    def actual(self, axis=0):
+        """Position actual 0x6064 in counts from home."""
+        return self.read(0x6064, axis=axis) - self.home[axis]
+
+    def set_target(self, axis, target_mm):
+        self.write(0x607A, self.counts(axis, target_mm), axis=axis)
+
+    def pp_move(self, axis, target_mm, immediate=True, relative=False, wait=True, timeout=30.0):
+        """Profile Position set-point with the CiA 402 hand-shake: target (mm from home; with relative=True,
+        from the previous target), new set-point (bit 4) rising edge, wait for the set-point acknowledge
+        (statusword bit 12), bit 4 back to 0; then (wait=True) wait for target reached (bit 10). Returns the time
+        the move took (from the edge) or None."""
+        if relative:
+            self.write(0x607A, int(round(target_mm * self.cpm(axis))), axis=axis)
+        else:
+            self.set_target(axis, target_mm)
+        cw = 0x0F | (0x20 if immediate else 0) | (0x40 if relative else 0)
+        t0 = time.monotonic()
+        self.controlword(axis, cw | 0x10)
+        self.wait_sw(axis, SW_ACK, SW_ACK, 2.0)
+        self.controlword(axis, cw)
+        if not wait:
+            return None
+        self.wait_sw(axis, SW_TARGET_REACHED | SW_ACK, SW_TARGET_REACHED, timeout)
+        return time.monotonic() - t0
+
+    # ---- PDOs, SYNC, heartbeat --------------------------------------------------------------------------
+    def map_tpdo(self, k, objects, trans_type=1, event_ms=0):
+        """Maps objects [(index, sub, bits), ...] into TPDO k (1..4) with the CiA 301 procedure (PRE-OP or OP)."""
+        comm, mapi = 0x1800 + k - 1, 0x1A00 + k - 1
+        cob = self.node.sdo[comm][1].raw
+        self.node.sdo[comm][1].raw = cob | 0x80000000
+        self.node.sdo[mapi][0].raw = 0
+        for i, (idx, sub, bits) in enumerate(objects, 1):
+            self.node.sdo[mapi][i].raw = (idx << 16) | (sub << 8) | bits
+        self.node.sdo[mapi][0].raw = len(objects)
+        self.node.sdo[comm][2].raw = trans_type
+        self.node.sdo[comm][5].raw = event_ms
+        self.node.sdo[comm][1].raw = cob & ~0x80000000
+
+    def pdo_valid(self, k, valid, tx=True):
+        """Makes TPDO (tx) or RPDO k (1..4) valid or not valid (COB-ID bit 31)."""
+        comm = (0x1800 if tx else 0x1400) + k - 1
+        cob = self.node.sdo[comm][1].raw
+        self.node.sdo[comm][1].raw = (cob & ~0x80000000) if valid else (cob | 0x80000000)
+
+    def start_sync(self, period_s):
+        self.network.sync.start(period_s)
+        self._sync_period = period_s
+
+    def stop_sync(self):
+        if self._sync_period is not None and self.network is not None:
+            self.network.sync.stop()
+        self._sync_period = None
+
+    def start_heartbeat(self, master_id, period_s=0.05):
+        """Produce a master heartbeat (state OPERATIONAL) with the kernel's periodic send."""
+        self.stop_heartbeat()
+        self._hb = self.network.send_periodic(0x700 + master_id, [0x05], period_s)
+
+    def stop_heartbeat(self):
+        if self._hb is not None:
+            self._hb.stop()
+            self._hb = None
+
+    # ---- the node's trace (local only) ------------------------------------------------------------------
+    def trace(self, settle_s=0.15):
+        if not self.trace_path:
+            raise RuntimeError("no trace: the node is not local, or was started without one")
+        time.sleep(settle_s)  # the daemon flushes every 64 cycles
+        return Trace(self.trace_path)
+
+    def save_plots(self, csv_path, prefix):
+        """Plots a run CSV now (LISSOM_HIL_PLOT=1, the default on a host), or leaves it for
+        `python -m lissom_hil.rig plot DIR` (LISSOM_HIL_PLOT=0: in the VM, where matplotlib is slow)."""
+        if os.environ.get("LISSOM_HIL_PLOT", "1") == "0":
+            return []
+        from . import plot
+        return plot.plot_run(csv_path, out_dir=os.path.dirname(csv_path), prefix=prefix, machine=self.cfg.machine)
+
+
+def plot_dir(path):
+    """Plots every *.csv run file under path (skips those whose PNGs are newer)."""
+    from . import plot
+    made = []
+    for dirpath, _, files in os.walk(path):
+        for fn in sorted(files):
+            if not fn.endswith(".csv"):
+                continue
+            csv_path = os.path.join(dirpath, fn)
+            prefix = fn[:-4]
+            pngs = [p for p in os.listdir(dirpath) if p.startswith(prefix + "_") and p.endswith(".png")]
+            if pngs and all(os.path.getmtime(os.path.join(dirpath, p)) >= os.path.getmtime(csv_path) for p in pngs):
+                continue
+            try:
+                made += plot.plot_run(csv_path, out_dir=dirpath, prefix=prefix) or []
+            except Exception as e:  # a plot must not hide the test results
+                print("plot %s: %s" % (csv_path, e), file=sys.stderr)
+    return made
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    if len(argv) == 2 and argv[0] == "plot":
+        for p in plot_dir(argv[1]):
+            print(p)
+        return 0
+    print(__doc__)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
+

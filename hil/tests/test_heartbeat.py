@@ -1,0 +1,56 @@
+"""Heartbeat consumer: the master's heartbeat stops during a move -> EMCY 0x8130, NMT PRE-OPERATIONAL
+(0x1029 = 0), and the 0x6007 reaction (quick stop) brings the axis to a jerk-limited stop."""
+import time
+
+from lissom_hil.checks import stop_violations
+
+MASTER_ID = 0x10
+CONSUMER_MS = 200
+QS = dict(quick_decel=1500.0, j=30000.0, snap=3e6)
+
+
+def test_heartbeat_loss(rig):
+    nid = rig.node_id
+    m0 = rig.frames.mark()
+    rig.start_heartbeat(MASTER_ID, 0.05)
+    rig.write(0x1016, (MASTER_ID << 16) | CONSUMER_MS, sub=1)  # monitor the master, 200 ms
+    rig.operational()
+    rig.enable(0, "PROFILED POSITION")
+    rig.set_profile(0, v=80.0, a=800.0, snap=3e6, profile_type=1, j=30000.0, quick_decel=QS["quick_decel"])
+    time.sleep(0.3)
+    m = rig.frames.mark()
+    assert not rig.frames.emcy(nid, m0), "EMCY while the master's heartbeat runs"
+    rig.pp_move(0, 200.0, wait=False)
+    time.sleep(0.5)
+    rig.stop_heartbeat()
+    t_stop = time.monotonic()
+    last_hb = rig.frames.select(lambda f: f.id == 0x700 + MASTER_ID, m)[-1].t
+    e = rig.frames.wait_emcy(nid, 0x8130, 2.0, m)
+    assert e is not None, "no heartbeat EMCY"
+    assert e.info == MASTER_ID
+    late = e.t - last_hb
+    # (upper bound: the consumer time, plus the node's cycle and scheduling under emulation)
+    assert CONSUMER_MS / 1000 * 0.9 <= late <= CONSUMER_MS / 1000 + 0.3, "EMCY %.3f s after the last heartbeat" % late
+    assert rig.wait_heartbeat(0x7F, 1.0, m) is not None, "node did not go to PRE-OPERATIONAL"
+    # quick stop (0x6007 = 3, 0x605A = 2): QUICK STOP ACTIVE until at rest, then SWITCH ON DISABLED
+    while rig.state_of(0) != "SWITCH ON DISABLED":
+        assert time.monotonic() - t_stop < 3.0, "axis did not stop"
+        time.sleep(0.02)
+    stopped = rig.demand(0)
+    assert 0 < stopped < 200000
+    time.sleep(0.1)
+    assert rig.demand(0) == stopped
+    assert rig.read(0x5020) & 0x02, "machine status: heartbeat lost"
+    # the master comes back: the heartbeat error is cleared (EMCY with code 0: no error left)
+    m2 = rig.frames.mark()
+    rig.start_heartbeat(MASTER_ID, 0.05)
+    assert rig.frames.wait_emcy(nid, 0x0000, 1.0, m2) is not None, "no error-reset EMCY"
+    if rig.local:
+        tr = rig.trace()
+        st = tr.axis(0, "state")
+        q = tr.first(st == 5)
+        assert q is not None
+        bad = stop_violations(tr, 0, q, {"a": QS["quick_decel"], "j": QS["j"], "snap": QS["snap"]}, pre=1)
+        assert not bad, bad
+        tr.write_csv(rig.out("heartbeat_trace.csv"), start=max(q - 600, 0))
+        rig.save_plots(rig.out("heartbeat_trace.csv"), "heartbeat_trace")

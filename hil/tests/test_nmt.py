@@ -1,0 +1,78 @@
+"""NMT slave, boot-up and heartbeat producer (CiA 301 §7.2.8)."""
+import time
+
+import canopen
+import numpy as np
+
+
+def _hb_times(rig, since, state=None):
+    nid = rig.node_id
+    return np.array([f.t for f in rig.frames.select(
+        lambda f: f.id == 0x700 + nid and len(f.data) == 1 and (state is None or f.data[0] == state), since)])
+
+
+def test_nmt(rig):
+    nid = rig.node_id
+    # boot-up (sent once, state byte 0) then heartbeats in PRE-OPERATIONAL (0x7F) every 100 ms (0x1017 default)
+    m = rig.frames.mark()
+    time.sleep(0.65)
+    t = _hb_times(rig, m, 0x7F)
+    assert len(t) >= 5, "heartbeats in PRE-OPERATIONAL: %d" % len(t)
+    period = np.median(np.diff(t))
+    assert abs(period - 0.100) < 0.015, "heartbeat period %.4f s" % period
+    assert rig.read(0x1017) == 100
+
+    # OPERATIONAL: heartbeat 0x05 and the node's TPDOs appear
+    m = rig.frames.mark()
+    rig.operational()
+    assert rig.frames.wait(lambda f: f.id == 0x180 + nid, 1.0, m) is not None, "no TPDO1 in OPERATIONAL"
+
+    # STOPPED: heartbeat 0x04, SDO is not served, no PDOs
+    m = rig.frames.mark()
+    rig.nmt("STOPPED")
+    assert rig.wait_heartbeat(0x04, 1.0, m) is not None
+    m2 = rig.frames.mark()
+    rig.node.sdo.RESPONSE_TIMEOUT = 0.3
+    try:
+        rig.node.sdo.upload(0x1000, 0)
+        assert False, "SDO answered in STOPPED"
+    except canopen.SdoCommunicationError:
+        pass
+    finally:
+        rig.node.sdo.RESPONSE_TIMEOUT = 2.0
+    time.sleep(0.2)
+    assert not rig.frames.select(lambda f: 0x180 <= f.id - nid < 0x580 and (f.id - nid) % 0x80 == 0, m2), \
+        "PDOs in STOPPED"
+
+    # back to PRE-OPERATIONAL: SDO again
+    m = rig.frames.mark()
+    rig.nmt("PRE-OPERATIONAL")
+    assert rig.wait_heartbeat(0x7F, 1.0, m) is not None
+    assert rig.read(0x1000) == 0x00020192
+
+    # heartbeat producer time: 50 ms, then off
+    rig.write(0x1017, 50)
+    m = rig.frames.mark()
+    time.sleep(0.45)
+    t = _hb_times(rig, m)
+    assert len(t) >= 6 and abs(np.median(np.diff(t)) - 0.050) < 0.01, "50 ms heartbeat: %s" % np.diff(t)
+    rig.write(0x1017, 0)
+    time.sleep(0.06)
+    m = rig.frames.mark()
+    time.sleep(0.3)
+    assert len(_hb_times(rig, m)) == 0, "heartbeat still produced with 0x1017 = 0"
+
+    # reset communication: boot-up again, 0x1017 back to its default; application objects kept
+    rig.write(0x6081, 12345)
+    m = rig.frames.mark()
+    rig.nmt("RESET COMMUNICATION")
+    assert rig.frames.wait(lambda f: f.id == 0x700 + nid and f.data == b"\x00", 1.0, m) is not None
+    assert rig.read(0x1017) == 100
+    assert rig.read(0x6081) == 12345
+
+    # reset node: boot-up, application objects back to their defaults too
+    m = rig.frames.mark()
+    rig.nmt("RESET")
+    assert rig.frames.wait(lambda f: f.id == 0x700 + nid and f.data == b"\x00", 1.0, m) is not None
+    assert rig.read(0x6081) == 10000
+    assert rig.wait_heartbeat(0x7F, 0.5) is not None

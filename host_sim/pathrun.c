@@ -1,0 +1,588 @@
+/* pathrun.c: a G-code program through the planner and interpolator, measured (see pathrun.h). */
+#include "pathrun.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "drive.h"
+#include "gcode.h"
+#include "geom.h"
+
+/* ---------------------------------------------------------------------------------------------------------- */
+
+char *sim_read_file(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap + 1);
+    if (!buf) {
+        fclose(f);
+        return NULL;
+    }
+    for (;;) {
+        if (n == cap) {
+            char *nb = realloc(buf, 2 * cap + 1);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                return NULL;
+            }
+            buf = nb;
+            cap *= 2;
+        }
+        size_t k = fread(buf + n, 1, cap - n, f);
+        n += k;
+        if (k == 0)
+            break;
+    }
+    fclose(f);
+    buf[n] = '\0';
+    if (len)
+        *len = n;
+    return buf;
+}
+
+void sim_run_planner_config(const sim_machine *m, lsm_planner_config *cfg)
+{
+    lsm_planner_default_config(cfg);
+    cfg->cycle_s = m->cycle_s;
+    cfg->axis_mask = 0;
+    for (int i = 0; i < m->n_axes; i++) {
+        const sim_machine_axis *a = &m->axes[i];
+        const int k = a->index;
+        cfg->axis_mask |= (uint8_t)(1u << k);
+        cfg->axis[k].v_max = a->v_max_u_s;
+        cfg->axis[k].a_max = a->a_max_u_s2;
+        cfg->axis[k].j_max = a->j_max_u_s3;
+        cfg->axis[k].snap_max = a->snap_max_u_s4;
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* the program: parsed blocks and the programmed path                                                          */
+
+typedef struct pblk {
+    lsm_gcode_block b;
+    double tol_mm;
+} pblk;
+
+typedef struct prog {
+    pblk *v;
+    size_t n, cap;
+    lsm_geom *path; /* the programmed path (X Y Z part of every block) */
+    double *s0;     /* cumulative length at the start of each path element */
+    uint32_t *pline;/* source line of each path element */
+    size_t np;
+    double end[LSM_MAX_AXES];
+    double length;
+} prog;
+
+static void prog_free(prog *p)
+{
+    free(p->v);
+    free(p->path);
+    free(p->s0);
+    free(p->pline);
+    memset(p, 0, sizeof *p);
+}
+
+static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
+{
+    memset(p, 0, sizeof *p);
+    lsm_gcode_options go;
+    lsm_gcode_default_options(&go);
+    go.axis_mask = o->machine->axis_mask;
+    lsm_gcode g;
+    if (lsm_gcode_init(&g, &go) != LSM_OK) {
+        snprintf(err, errlen, "G-code parser init failed");
+        return -1;
+    }
+    size_t at = 0;
+    lsm_gcode_result res;
+    for (;;) {
+        size_t used = 0;
+        lsm_status st;
+        bool fin = at >= o->len;
+        if (!fin)
+            st = lsm_gcode_feed(&g, o->text + at, o->len - at, &used, &res);
+        else
+            st = lsm_gcode_finish(&g, &res);
+        at += used;
+        if (res.complete) {
+            if (st != LSM_OK) {
+                snprintf(err, errlen, "G-code line %u column %u: %s", (unsigned)res.err.line, (unsigned)res.err.column,
+                         lsm_status_str(res.err.code));
+                return -1;
+            }
+            for (int k = 0; k < res.n_blocks; k++) {
+                if (p->n == p->cap) {
+                    p->cap = p->cap ? 2 * p->cap : 256;
+                    pblk *nv = realloc(p->v, p->cap * sizeof *nv);
+                    if (!nv) {
+                        snprintf(err, errlen, "out of memory");
+                        return -1;
+                    }
+                    p->v = nv;
+                }
+                pblk *q = &p->v[p->n++];
+                q->b = res.blocks[k];
+                if (res.modal.blend == LSM_GCODE_EXACT_STOP)
+                    q->tol_mm = 0;
+                else
+                    q->tol_mm = res.modal.blend_tol_mm > 0 ? res.modal.blend_tol_mm : o->machine->blend_tol_mm;
+            }
+            if (res.end_of_program)
+                break;
+        }
+        if (fin)
+            break;
+    }
+    const double *pos = lsm_gcode_position(&g);
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        p->end[i] = pos[i];
+    /* the programmed path */
+    p->path = calloc(p->n ? p->n : 1, sizeof *p->path);
+    p->s0 = calloc(p->n + 1, sizeof *p->s0);
+    p->pline = calloc(p->n + 1, sizeof *p->pline);
+    if (!p->path || !p->s0 || !p->pline) {
+        snprintf(err, errlen, "out of memory");
+        return -1;
+    }
+    double s = 0;
+    for (size_t i = 0; i < p->n; i++) {
+        const lsm_gcode_block *b = &p->v[i].b;
+        lsm_geom gg;
+        lsm_status st;
+        if (b->type == LSM_GCODE_BLOCK_ARC) {
+            st = lsm_geom_arc_init(&gg, b->start, b->end, b->centre, (lsm_geom_plane)b->plane, b->dir, b->turns);
+        } else {
+            double a[LSM_MAX_AXES], e[LSM_MAX_AXES];
+            for (int k = 0; k < LSM_MAX_AXES; k++) {
+                a[k] = k < 3 ? b->start[k] : 0;
+                e[k] = k < 3 ? b->end[k] : 0;
+            }
+            st = lsm_geom_line_init(&gg, a, e);
+        }
+        if (st != LSM_OK)
+            continue; /* e.g. a rotary-only move: no X Y Z path */
+        p->path[p->np] = gg;
+        p->s0[p->np] = s;
+        p->pline[p->np] = b->line;
+        s += gg.len;
+        p->np++;
+    }
+    p->s0[p->np] = s;
+    p->length = s;
+    return 0;
+}
+
+/* Distance (X Y Z) from x to one path element. */
+static double dist_elem(const lsm_geom *g, const double x[3])
+{
+    if (g->kind == LSM_GEOM_LINE) {
+        const double *p0 = g->u.line.p0, *d = g->u.line.dir;
+        double t = (x[0] - p0[0]) * d[0] + (x[1] - p0[1]) * d[1] + (x[2] - p0[2]) * d[2];
+        if (t < 0)
+            t = 0;
+        if (t > g->len)
+            t = g->len;
+        double r = 0;
+        for (int i = 0; i < 3; i++) {
+            const double e = x[i] - (p0[i] + d[i] * t);
+            r += e * e;
+        }
+        return sqrt(r);
+    }
+    const lsm_geom_arc *a = &g->u.arc;
+    double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
+                   a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
+    double d[3] = {x[0] - a->centre_mm[0], x[1] - a->centre_mm[1], x[2] - a->centre_mm[2]};
+    const double u = d[0] * a->e1[0] + d[1] * a->e1[1] + d[2] * a->e1[2];
+    const double w = d[0] * a->e2[0] + d[1] * a->e2[1] + d[2] * a->e2[2];
+    const double phi = atan2(w, u);
+    const double sg = a->sweep_rad < 0 ? -1.0 : 1.0, sw = fabs(a->sweep_rad);
+    double rel = fmod(sg * (phi - a->phi0_rad), 2 * LSM_PI);
+    if (rel < 0)
+        rel += 2 * LSM_PI;
+    double best = INFINITY;
+    for (double t = rel; t <= sw + 1e-12; t += 2 * LSM_PI) {
+        const double ph = a->phi0_rad + sg * t, f = t / sw;
+        double q[3];
+        for (int i = 0; i < 3; i++)
+            q[i] = a->centre_mm[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
+        const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
+        if (r < best)
+            best = r;
+    }
+    double e0[LSM_MAX_AXES] = {0}, e1[LSM_MAX_AXES] = {0};
+    lsm_geom_eval(g, 0, e0, NULL, NULL);
+    lsm_geom_eval(g, g->len, e1, NULL, NULL);
+    for (int k = 0; k < 2; k++) {
+        const double *q = k ? e1 : e0;
+        const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
+        if (r < best)
+            best = r;
+    }
+    return best;
+}
+
+/* Distance from x to the programmed path near the element of source line `line` (the block the setpoint belongs
+ * to): every element whose span lies within reach_mm of that element's span. */
+static double dev_of(const prog *p, const double x[3], uint32_t line, double reach_mm)
+{
+    if (p->np == 0)
+        return 0;
+    /* the last element whose line is <= line */
+    size_t lo = 0, hi = p->np;
+    while (hi - lo > 1) {
+        const size_t mid = (lo + hi) / 2;
+        if (p->pline[mid] <= line)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    const size_t e = lo;
+    /* a fitted arc carries the line of its last point, and corner transitions the line of the next block: look back
+     * over two whole runs (LSM_ARCFIT_MAX points each) */
+    const double s_lo = p->s0[e] - reach_mm, s_hi = p->s0[e + 1] + reach_mm;
+    size_t a = e, b = e;
+    while (a > 0 && (p->s0[a] > s_lo || e - a < 2 * LSM_ARCFIT_MAX + 4))
+        a--;
+    while (b + 1 < p->np && p->s0[b + 1] < s_hi)
+        b++;
+    double best = INFINITY;
+    for (size_t i = a; i <= b; i++) {
+        const double d = dist_elem(&p->path[i], x);
+        if (d < best)
+            best = d;
+    }
+    return best;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+
+static double now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
+}
+
+typedef struct rec {
+    double *q, *feed;
+    uint32_t *line;
+    size_t n, cap;
+} rec;
+
+static int rec_push(rec *r, const double pos[LSM_MAX_AXES], double feed, uint32_t line)
+{
+    if (r->n == r->cap) {
+        size_t nc = r->cap ? 2 * r->cap : 4096;
+        double *nq = realloc(r->q, nc * LSM_MAX_AXES * sizeof *nq);
+        if (!nq)
+            return -1;
+        r->q = nq;
+        double *nf = realloc(r->feed, nc * sizeof *nf);
+        if (!nf)
+            return -1;
+        r->feed = nf;
+        uint32_t *nl = realloc(r->line, nc * sizeof *nl);
+        if (!nl)
+            return -1;
+        r->line = nl;
+        r->cap = nc;
+    }
+    memcpy(r->q + r->n * LSM_MAX_AXES, pos, LSM_MAX_AXES * sizeof(double));
+    r->feed[r->n] = feed;
+    r->line[r->n] = line;
+    r->n++;
+    return 0;
+}
+
+static lsm_status append_block(lsm_planner *pl, const pblk *q)
+{
+    const lsm_gcode_block *b = &q->b;
+    lsm_planner_move mv;
+    memset(&mv, 0, sizeof mv);
+    mv.rapid = b->type == LSM_GCODE_BLOCK_RAPID;
+    const bool xyz = b->start[0] != b->end[0] || b->start[1] != b->end[1] || b->start[2] != b->end[2] ||
+                     b->type == LSM_GCODE_BLOCK_ARC;
+    mv.feed_mm_s = xyz ? b->feed_mm_s : b->feed_rot_rad_s;
+    mv.tol_mm = q->tol_mm;
+    mv.seq = b->line;
+    if (b->type == LSM_GCODE_BLOCK_ARC) {
+        for (int k = 3; k < 6; k++)
+            if (b->start[k] != b->end[k])
+                return LSM_E_PL_AXIS; /* arcs that turn A B C are not supported */
+        return lsm_planner_append_arc(pl, b->end, b->centre, (lsm_geom_plane)b->plane, b->dir, b->turns, &mv);
+    }
+    return lsm_planner_append_line(pl, b->end, &mv);
+}
+
+static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
+{
+    lsm_planner_config cfg;
+    if (o->cfg_override)
+        cfg = *o->cfg_override;
+    else
+        sim_run_planner_config(o->machine, &cfg);
+    uint32_t cap = o->capacity;
+    if (cap == 0) {
+        cap = 3u * (uint32_t)o->machine->lookahead_blocks + 8u;
+        if (cap < 256)
+            cap = 256;
+    }
+    lsm_pblock *store = calloc(cap, sizeof *store);
+    lsm_planner *pl = calloc(1, sizeof *pl);
+    lsm_interp *ip = calloc(1, sizeof *ip);
+    if (!store || !pl || !ip) {
+        free(store);
+        free(pl);
+        free(ip);
+        snprintf(r->err, sizeof r->err, "out of memory");
+        return -1;
+    }
+    double start[LSM_MAX_AXES] = {0};
+    if (p->n)
+        memcpy(start, p->v[0].b.start, sizeof start);
+    lsm_status st = lsm_planner_init(pl, &cfg, store, cap, start);
+    if (st != LSM_OK) {
+        snprintf(r->err, sizeof r->err, "planner init: %s", lsm_status_str(st));
+        free(store);
+        free(pl);
+        free(ip);
+        return -1;
+    }
+    lsm_interp_init(ip, pl);
+    size_t next = 0, appended = 0;
+    bool fin = false;
+    const double max_t = o->max_time_s > 0 ? o->max_time_s : 3600.0;
+    const uint64_t max_cycles = (uint64_t)(max_t / cfg.cycle_s) + 1;
+    double t_append = 0, t_step = 0;
+    size_t ev = 0;
+    int rc = 0;
+    uint32_t pieces0 = 0;
+    double t_wall0 = now_ns();
+    uint64_t k_done = 0;
+    for (uint64_t k = 0;; k++) {
+        if (!fin) {
+            const bool slow = o->feed_every > 0;
+            while (next < p->n && lsm_planner_free(pl) >= 3 && (!slow || k % o->feed_every == 0)) {
+                const double t0 = now_ns();
+                st = append_block(pl, &p->v[next]);
+                t_append += now_ns() - t0;
+                if (st == LSM_E_ZERO_LENGTH) { /* too short to represent: dropped (the parser dropped exact zeros) */
+                    next++;
+                    continue;
+                }
+                if (st == LSM_E_FULL) /* the planner holds points for fitting: run the machine and retry */
+                    break;
+                if (st != LSM_OK) {
+                    snprintf(r->err, sizeof r->err, "G-code line %u: planner: %s", (unsigned)p->v[next].b.line,
+                             lsm_status_str(st));
+                    rc = -1;
+                    goto done;
+                }
+                next++;
+                appended++;
+                if (slow)
+                    break;
+            }
+            if (next == p->n && lsm_planner_finish(pl) == LSM_OK)
+                fin = true;
+        }
+        while (ev < o->n_events && o->events[ev].cycle <= k) {
+            const sim_run_event *e = &o->events[ev++];
+            if (e->kind == 1)
+                lsm_interp_hold(ip);
+            else if (e->kind == 2)
+                lsm_interp_resume(ip);
+            else if (e->kind == 3)
+                lsm_interp_set_override(ip, e->value);
+        }
+        double pos[LSM_MAX_AXES];
+        const double t0 = now_ns();
+        const lsm_interp_state s = lsm_interp_step(ip, pos);
+        t_step += now_ns() - t0;
+        const lsm_pblock *cb = lsm_planner_block(pl, ip->blk);
+        if (rec_push(out, pos, lsm_interp_feed(ip), cb ? cb->seq : 0) != 0) {
+            snprintf(r->err, sizeof r->err, "out of memory");
+            rc = -1;
+            goto done;
+        }
+        if (s == LSM_INTERP_DONE) {
+            k_done = k;
+            break;
+        }
+        if (k >= max_cycles) {
+            snprintf(r->err, sizeof r->err, "run exceeded %.0f s of machine time (stuck?)", max_t);
+            rc = -1;
+            goto done;
+        }
+        if (o->progress && (k & 0xFFFF) == 0 && k > 0 && now_ns() - t_wall0 > 2e9) {
+            fprintf(stderr, "\r  %5.1f %% of the program, %.1f s machine time", 100.0 * (double)next / (double)(p->n ? p->n : 1),
+                    (double)k * cfg.cycle_s);
+            fflush(stderr);
+        }
+    }
+    if (o->progress && now_ns() - t_wall0 > 2e9)
+        fprintf(stderr, "\r%60s\r", "");
+    r->cycles = k_done + 1;
+    r->duration_s = (double)r->cycles * cfg.cycle_s;
+    r->plan_ns_per_block = appended ? t_append / (double)appended : 0;
+    r->interp_ns_per_cycle = out->n ? t_step / (double)out->n : 0;
+    (void)pieces0;
+done:
+    r->stats = pl->stats;
+    r->replans = ip->replans;
+    r->plan_errors = ip->plan_errors;
+    free(store);
+    free(pl);
+    free(ip);
+    return rc;
+}
+
+static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
+{
+    (void)o;
+    (void)p;
+    (void)out;
+    snprintf(r->err, sizeof r->err, "vpop: not implemented yet");
+    return -1;
+}
+
+int sim_run_program(const sim_run_opts *o, sim_run_result *r)
+{
+    memset(r, 0, sizeof *r);
+    r->pl_block_bytes = (uint32_t)sizeof(lsm_pblock);
+    const sim_machine *m = o->machine;
+    r->cycle_s = m->cycle_s;
+    r->n_axes = m->n_axes;
+    for (int i = 0; i < m->n_axes; i++) {
+        r->axis_index[i] = m->axes[i].index;
+        r->axis_name[i] = m->axes[i].name;
+    }
+    prog p;
+    if (prog_load(o, &p, r->err, sizeof r->err) != 0) {
+        prog_free(&p);
+        return -1;
+    }
+    memcpy(r->prog_end, p.end, sizeof r->prog_end);
+    r->prog_blocks = p.n;
+    r->prog_length_mm = p.length;
+    rec out = {0};
+    int rc;
+    if (o->planner == SIM_RUN_VPOP)
+        rc = run_vpop(o, &p, &out, r);
+    else
+        rc = run_lissom(o, &p, &out, r);
+    if (rc != 0) {
+        free(out.q);
+        free(out.feed);
+        free(out.line);
+        prog_free(&p);
+        return rc;
+    }
+    r->n = out.n;
+    r->q = out.q;
+    r->feed = out.feed;
+    r->line = out.line;
+    /* metrics: backward differences with the machine at rest before and after */
+    const double dt = m->cycle_s;
+    for (int a = 0; a < LSM_MAX_AXES; a++) {
+        r->max_v[a] = r->max_a[a] = r->max_j[a] = 0;
+        if (r->n == 0)
+            continue;
+        double q1 = r->q[a], q2 = q1, q3 = q1; /* q[k-1], q[k-2], q[k-3] */
+        for (size_t k = 0; k < r->n + 3; k++) {
+            const double q0 = k < r->n ? r->q[k * LSM_MAX_AXES + a] : r->q[(r->n - 1) * LSM_MAX_AXES + a];
+            const double v = fabs(q0 - q1) / dt;
+            const double acc = fabs(q0 - 2 * q1 + q2) / (dt * dt);
+            const double j = fabs(q0 - 3 * q1 + 3 * q2 - q3) / (dt * dt * dt);
+            if (v > r->max_v[a])
+                r->max_v[a] = v;
+            if (acc > r->max_a[a])
+                r->max_a[a] = acc;
+            if (j > r->max_j[a])
+                r->max_j[a] = j;
+            q3 = q2;
+            q2 = q1;
+            q1 = q0;
+        }
+    }
+    /* deviation from the programmed path */
+    double vmax = 0;
+    for (int i = 0; i < m->n_axes; i++)
+        if (m->axes[i].v_max_u_s > vmax && !m->axes[i].rotary)
+            vmax = m->axes[i].v_max_u_s;
+    const double reach = 2 * vmax * dt + 1.0;
+    r->max_dev_mm = 0;
+    for (size_t k = 0; k < r->n; k++) {
+        const double d = dev_of(&p, r->q + k * LSM_MAX_AXES, r->line[k], reach);
+        if (d > r->max_dev_mm) {
+            r->max_dev_mm = d;
+            if (getenv("LSM_DEV_DEBUG"))
+                fprintf(stderr, "dev %g at k %zu line %u pos %g %g %g\n", d, k, r->line[k], r->q[k * LSM_MAX_AXES],
+                        r->q[k * LSM_MAX_AXES + 1], r->q[k * LSM_MAX_AXES + 2]);
+        }
+    }
+    r->end_error = 0;
+    if (r->n) {
+        for (int i = 0; i < m->n_axes; i++) {
+            const int a = m->axes[i].index;
+            const double e = fabs(r->q[(r->n - 1) * LSM_MAX_AXES + a] - p.end[a]);
+            if (e > r->end_error)
+                r->end_error = e;
+        }
+    }
+    /* drives */
+    if (o->drives && r->n) {
+        r->act = calloc(r->n * LSM_MAX_AXES, sizeof *r->act);
+        if (!r->act) {
+            snprintf(r->err, sizeof r->err, "out of memory");
+            prog_free(&p);
+            return -1;
+        }
+        for (int i = 0; i < m->n_axes; i++) {
+            const int a = m->axes[i].index;
+            sim_drive d;
+            lsm_status st = sim_drive_init(&d, &m->axes[i].drive, dt, r->q[a]);
+            if (st != LSM_OK) {
+                snprintf(r->err, sizeof r->err, "drive %c: %s", m->axes[i].name, lsm_status_str(st));
+                prog_free(&p);
+                return -1;
+            }
+            double q1 = r->q[a], q2 = q1;
+            for (size_t k = 0; k < r->n; k++) {
+                const double q0 = r->q[k * LSM_MAX_AXES + a];
+                const double v = (q0 - q1) / dt, acc = (q0 - 2 * q1 + q2) / (dt * dt);
+                double act;
+                sim_drive_step_ff(&d, q0, v, acc, &act);
+                r->act[k * LSM_MAX_AXES + a] = act;
+                const double fe = fabs(q0 - act);
+                if (fe > r->max_follow_err[a])
+                    r->max_follow_err[a] = fe;
+                q2 = q1;
+                q1 = q0;
+            }
+        }
+    }
+    prog_free(&p);
+    return 0;
+}
+
+void sim_run_free(sim_run_result *r)
+{
+    free(r->q);
+    free(r->feed);
+    free(r->line);
+    free(r->act);
+    r->q = r->feed = r->act = NULL;
+    r->line = NULL;
+}

@@ -1,0 +1,89 @@
+/*
+ * pathrun.h: run a G-code program through the look-ahead planner and the interpolator (or through the VPOp
+ * reference planner) on a machine, and measure the result (host only, sim_run_*).
+ *
+ * The program is parsed with the firmware's streaming parser (gcode.h) and appended block by block while the
+ * interpolator runs, cycle by cycle, as the firmware would (the planner holds `capacity` blocks). Every
+ * setpoint is recorded. Measured from the setpoints, as Beudaert eq 6 does (backward differences, the machine
+ * at rest before the first and after the last setpoint):
+ *   max_v/a/j per axis  max |dq|/dt, |d²q|/dt², |d³q|/dt³ (u/s, u/s², u/s³);
+ *   max_deviation       largest distance (X Y Z) of a setpoint from the programmed path (lines and arcs, G0
+ *                       included), in mm;
+ *   end_error           largest |last setpoint - programmed end| over the axes (mm or rad).
+ * With drives, every axis also runs the simulated servo (drive.h) with velocity and acceleration
+ * feed-forward from the same differences; the actual positions are recorded.
+ */
+#ifndef LSM_SIM_PATHRUN_H
+#define LSM_SIM_PATHRUN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "interp.h"
+#include "machine.h"
+#include "planner.h"
+
+typedef enum sim_run_planner { SIM_RUN_LISSOM = 0, SIM_RUN_VPOP = 1 } sim_run_planner;
+
+/* Something to do at a given cycle (tests, CLI): hold, resume, override. */
+typedef struct sim_run_event {
+    uint64_t cycle;
+    int kind;       /* 1 hold, 2 resume, 3 override (value) */
+    double value;
+} sim_run_event;
+
+typedef struct sim_run_opts {
+    const sim_machine *machine;
+    const char *text;          /* the G-code program */
+    size_t len;
+    sim_run_planner planner;
+    uint32_t capacity;         /* planner blocks; 0: max(256, 3 lookahead_blocks + 8) */
+    bool drives;               /* also simulate the drives */
+    double max_time_s;         /* stop with an error if the run takes longer (0: 3600 s of machine time) */
+    uint32_t feed_every;       /* > 0: append at most one block every this many cycles (underrun tests) */
+    const sim_run_event *events;
+    size_t n_events;
+    lsm_planner_config *cfg_override; /* optional: planner configuration to use instead of the machine's */
+    bool progress;             /* a progress line on stderr for long runs */
+} sim_run_opts;
+
+typedef struct sim_run_result {
+    size_t n;                  /* setpoints (one per cycle) */
+    double cycle_s;
+    int n_axes;                /* machine axes */
+    int axis_index[SIM_MACHINE_MAX_AXES]; /* their G-code index (X = 0 .. C = 5) */
+    char axis_name[SIM_MACHINE_MAX_AXES];
+    double *q;                 /* n x LSM_MAX_AXES setpoints */
+    double *feed;              /* n: path feed (mm/s) */
+    uint32_t *line;            /* n: source line of the block being run */
+    double *act;               /* n x LSM_MAX_AXES actual positions (drives) or NULL */
+    double duration_s;         /* time of the last setpoint that moved (the motion's end) */
+    uint64_t cycles;           /* cycles up to then */
+    double max_v[LSM_MAX_AXES], max_a[LSM_MAX_AXES], max_j[LSM_MAX_AXES];
+    double max_dev_mm;
+    double end_error;
+    double max_follow_err[LSM_MAX_AXES];
+    double prog_end[LSM_MAX_AXES];
+    size_t prog_blocks;        /* motion blocks in the program */
+    double prog_length_mm;     /* length of the programmed path (X Y Z) */
+    double plan_ns_per_block;  /* host time spent in append (corner smoothing + backward pass) per block */
+    double interp_ns_per_cycle;/* host time per interpolator cycle (piece planning included) */
+    double piece_ns;           /* host time per planned piece */
+    lsm_planner_stats stats;
+    uint32_t replans, plan_errors;
+    uint32_t pl_block_bytes;   /* sizeof(lsm_pblock) of this build */
+    char err[320];
+} sim_run_result;
+
+/* Runs the program. Returns 0 on success; on error r->err says why (G-code line/column, planner status ...). */
+int sim_run_program(const sim_run_opts *o, sim_run_result *r);
+void sim_run_free(sim_run_result *r);
+
+/* Planner configuration from a machine file. */
+void sim_run_planner_config(const sim_machine *m, lsm_planner_config *cfg);
+
+/* Reads a whole file (malloc'd, NUL-terminated). NULL on error. */
+char *sim_read_file(const char *path, size_t *len);
+
+#endif /* LSM_SIM_PATHRUN_H */

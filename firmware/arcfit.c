@@ -142,7 +142,10 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
         return false;
     const lsm_real k = sgy / sgg;
     const lsm_real R = R1 / lsm_fabs(k);
-    if (!(lsm_fabs(k) > R0) || !(R > LSM_R(4.0) * tol) || !(L < LSM_R(2.0) * R)) {
+    /* an arc is evaluated with an error of about R eps (lsm_real): a radius so large that this error is not far
+     * below the tolerance (float builds) is fitted with a line, or not at all */
+    const bool too_flat = R * LSM_REAL_EPS * LSM_R(2048.0) > tol;
+    if (!(lsm_fabs(k) > R0) || !(R > LSM_R(4.0) * tol) || !(L < LSM_R(2.0) * R) || too_flat) {
         if (line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK) {
             res->kind = LSM_ARCFIT_LINE;
             res->err_mm = lerr;

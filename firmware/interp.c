@@ -60,6 +60,8 @@ static void activate(lsm_interp *ip)
     const lsm_pblock *b = bk(ip, ip->blk);
     if (b == NULL)
         return;
+    ip->act_blk = ip->blk;
+    ip->act_ok = 1;
     const lsm_geom *g = &b->g;
     ip->gkind = g->kind;
     if (g->kind == LSM_GEOM_ARC) {
@@ -109,6 +111,8 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
     const lsm_pblock *b = bk(ip, ip->blk);
     if (b == NULL)
         return;
+    if (!ip->act_ok || ip->act_blk != ip->blk)
+        activate(ip); /* (re)started on a block that was never set up */
     ip->off_mm += ds;
     bool moved = false;
     while (ip->off_mm > b->g.len && ip->blk + 1u != pl->tail) {
@@ -285,24 +289,40 @@ static lsm_real phase_travel(lsm_interp *ip, uint8_t p, lsm_real tau, bool enter
 
 /*
  * Advances the piece clock by dt_adv; returns the distance travelled (ds >= 0 modulo rounding) and whether the
- * piece ended (then *left is the time beyond its end).
+ * piece ended (then *left is the time beyond its end), or stopped at the end of a ramp because the plan changed
+ * (*ramp_end; *left as well).
  */
-static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_real *left)
+static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_real *left, bool *ramp_end)
 {
     lsm_real ds = R0;
     uint8_t p = ip->phase;
     lsm_real tau = ip->tau + dt_adv;
     bool entered = false;
+    const bool stop_at_ramp_end = ip->gen != ip->pl->gen && !ip->pc.hold;
     *ended = false;
+    *ramp_end = false;
     while (p < LSM_PIECE_PHASES && tau >= ip->pc.ph[p].T_s) {
         ds += ip->pc.ph[p].len_mm - ip->sloc;
         tau -= ip->pc.ph[p].T_s;
         ip->sloc = R0;
         p++;
         entered = true;
-        if (p < LSM_PIECE_PHASES && is_ramp_phase(p) && (p == 1u || p == 9u)) {
-            const int e = p == 1u ? 8 : 16; /* a ramp starts: committed until its end */
+        if (p == 1u || p == 9u) {
+            /* a ramp starts: committed until its end, where a = 0 again and a new piece may be taken (planner.h,
+             * lsm_planner_set_horizon) */
+            const int e = p == 1u ? 8 : 16;
+            ip->hz_v = ip->pc.st[e].v_mm_s;
             ahead(ip, ip->pc.st[e].s_mm - ip->pc.st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
+        }
+        if ((p == 8u || p == 16u) && (stop_at_ramp_end || (p == 8u && ip->pc.step && !ip->pc.hold)) &&
+            ip->pc.st[p].s_mm > ip->pc.st[p - 7u].s_mm) {
+            /* the end of a ramp while the plan changed, or of a step of a staircase: stop the clock here (the
+             * caller re-plans) */
+            ip->phase = p;
+            ip->tau = R0;
+            *ramp_end = true;
+            *left = tau;
+            return ds;
         }
     }
     ip->phase = p;
@@ -362,15 +382,33 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
 {
     lsm_real adv = first;
     for (int guard = 0; guard < 8 && ip->running; guard++) {
-        bool ended;
+        bool ended, ramp_end;
         lsm_real left = R0;
-        const lsm_real ds = piece_advance(ip, adv, &ended, &left);
+        const lsm_real ds = piece_advance(ip, adv, &ended, &left, &ramp_end);
+        if (ramp_end) {
+            /* re-plan exactly at the end of the ramp, from the point and speed the planner was told (before the
+             * cursor moves there: rounding may carry it just past a block end, which would release that block) */
+            lsm_piece np;
+            const uint32_t g = ip->pl->gen;
+            ip->v_mm_s = ip->hz_v;
+            if (lsm_planner_plan_piece(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, LSM_PIECE_REPLAN, &np) == LSM_OK &&
+                np.T_s > R0) {
+                place(ip, ip->hz_blk, ip->hz_off);
+                start_piece(ip, &np, left);
+                ip->replans++;
+            } else {
+                advance_path(ip, ds);
+            }
+            ip->gen = g; /* once per ramp end: the current piece stays valid if none was found */
+            adv = left;
+            continue;
+        }
         if (!ended) {
-            if (is_ramp_phase(ip->phase))
-                lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off);
-            else
-                lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm);
             advance_path(ip, ds);
+            if (is_ramp_phase(ip->phase))
+                lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v);
+            else
+                lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s);
             return;
         }
         end_piece(ip);
@@ -468,16 +506,25 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
                     }
                 }
             } else if (ip->gen != pl->gen) {
-                ip->gen = pl->gen;
-                if (plan_from_here(ip, ip->v_mm_s, LSM_PIECE_NORMAL, &np) == LSM_OK && np.T_s > R0) {
+                /* In a cruise this is the point the planner verified the change from (lsm_planner_set_horizon):
+                 * if no new piece is found, the current one is still valid and runs on. At a ramp start the
+                 * planner verified the end of the ramp instead: the ramp end re-plans there. */
+                const bool cruise = p == 0u || p == 8u || p == 16u;
+                const uint32_t g = pl->gen;
+                if (lsm_planner_plan_piece(pl, ip->blk, ip->off_mm, ip->v_mm_s, LSM_PIECE_REPLAN, &np) == LSM_OK &&
+                    np.T_s > R0) {
                     ip->replans++;
                     start_piece(ip, &np, dt);
+                } else if (cruise) {
+                    ip->gen = g;
                 }
             }
         }
         run_cycle(ip, dt);
     }
 out:
+    if (!ip->running) /* at rest (or stopped for good): the machine stands here */
+        lsm_planner_set_horizon(pl, ip->blk, ip->off_mm, R0);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pos[i] = ip->pos[i];
     return (lsm_interp_state)ip->state;

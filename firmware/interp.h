@@ -17,8 +17,12 @@
  *      an arc by rotating (cos phi, sin phi) by w ds with a short polynomial (re-anchored on entry and every 256
  *      cycles), a clothoid with the incremental stepper of clothoid.h (lsm_clothoid_step).
  * When a piece ends between two samples, the next one is planned at once and sampled at the rest of the cycle.
- * Replanning happens only where a = 0: in cruises and at ramp starts. There the interpolator takes a new piece
- * when the planner changed (blocks appended, override changed) or a feed hold was requested.
+ * Replanning happens only where a = 0: at samples in cruises and at ramp starts, and exactly at the end of a
+ * ramp (between two samples: the new piece is sampled at the rest of the cycle). There the interpolator takes a
+ * new piece when the planner changed (blocks appended, override changed), a feed hold was requested, or the
+ * ramp was one step of a staircase (planner.h). After every cycle it tells the planner where it will next be
+ * able to re-plan and at what speed (lsm_planner_set_horizon: the end of the current ramp, or the cursor); if
+ * no new piece is found, the current one stays valid and runs on.
  *
  * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
  * at once; both through the planner, so every change is a verified sin² ramp (jerk-limited). 0 % is a feed hold.
@@ -29,7 +33,9 @@
  * converts each setpoint with one rounding, round(x * counts_per_mm): the last one is then the count of the
  * programmed end, i.e. 0 counts error by construction (no accumulated travel is converted).
  * Buffer underrun: the current piece already plans a stop at the end of the buffer (planner.h invariants), so the
- * machine stops cleanly there and restarts from rest when blocks arrive.
+ * machine stops cleanly there (IDLE) and restarts from rest by itself when blocks are appended (a block appended
+ * while it decelerates only joins at speed if the planner verified that it still can from the interpolator's
+ * commitment point; else the junction is an exact stop).
  *
  * Units: mm, s, rad.
  */
@@ -64,10 +70,14 @@ typedef struct lsm_interp {
     lsm_real ee[2];              /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
     lsm_real cd[2], sd[2];       /* per ramp: cos, sin of pi / n1 (one cycle) */
     lsm_real v_mm_s;             /* feed at the last sample */
+    uint32_t act_blk;            /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
+    uint8_t act_ok;
+    uint8_t reserved[3];
     uint32_t blk;                /* path cursor: block id ... */
     lsm_real off_mm;             /* ... and offset in it */
     uint32_t hz_blk;             /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
+    lsm_real hz_v;               /* speed there (a = 0) */
     lsm_real ac, as, aw;         /* arc: cos phi, sin phi, dphi/ds */
     lsm_clothoid_stepper cs;     /* clothoid stepper */
     lsm_real pos[LSM_MAX_AXES];  /* last setpoint */

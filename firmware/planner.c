@@ -6,28 +6,6 @@
 #include "corner.h"
 #include "lsm_math.h"
 
-#if defined(__GNUC__)
-#undef lsm_fabs
-#undef lsm_sqrt
-#if LSM_REAL_IS_FLOAT
-#define lsm_fabs(x) __builtin_fabsf(x)
-#define lsm_sqrt(x) __builtin_sqrtf(x)
-#else
-#define lsm_fabs(x) __builtin_fabs(x)
-#define lsm_sqrt(x) __builtin_sqrt(x)
-#endif
-#endif
-
-#ifdef LSM_PL_DEBUG
-#include <stdio.h>
-static int pl_verbose;
-#define PLDBG(...) printf(__VA_ARGS__)
-#define PLV(...) (pl_verbose ? printf(__VA_ARGS__) : 0)
-#else
-#define PLV(...) ((void)0)
-#define PLDBG(...) ((void)0)
-#endif
-
 #define PI_R ((lsm_real)LSM_PI)
 #define R0 LSM_R(0.0)
 #define R1 LSM_R(1.0)
@@ -44,6 +22,7 @@ static int pl_verbose;
 #define FIT_ITER 40
 #define W_BISECT 14
 #define VC_BISECT 12
+#define STAIR_LEVELS 6
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* storage                                                                                                       */
@@ -441,6 +420,7 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 }
 
 static void backward_pass(lsm_planner *pl);
+static bool horizon_feasible(lsm_planner *pl);
 
 /* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
 static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
@@ -455,7 +435,7 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     uint8_t flags = mv->rapid ? (uint8_t)LSM_PB_RAPID : (uint8_t)0;
     bool corner = false;
     lsm_corner_result cr;
-    lsm_geom g1;
+    lsm_geom g1, g_orig = *g, prev_orig = *g;
     if (!has_prev) {
         flags |= LSM_PB_STOP; /* nothing before: start from rest */
     } else if (pl->tail_tol_mm > R0 && lines_collinear(&prev->g, g)) {
@@ -474,13 +454,20 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         cp.max_trim1_mm = lsm_min2(pl->cfg.trim_share * prev->g.len, LSM_R(0.999) * room);
         cp.max_trim2_mm = pl->cfg.trim_share * g->len;
         lsm_status cs = (cp.max_trim1_mm > R0) ? lsm_corner_smooth(&prev->g, g, &cp, &cr) : LSM_E_CORNER_NO_SOLUTION;
-        if (cs == LSM_OK && cr.trim1_mm < prev->g.len && cr.trim2_mm < g->len && cr.trim1_mm <= room) {
+        /* a transition of (almost) no length is a numerical corner case (its curvature, hence its cap, is
+         * unbounded): stop there instead */
+        const bool degenerate =
+            cs == LSM_OK && !(cr.trans[0].len + cr.trans[1].len > LEN_EPS * (R1 + prev->g.len + g->len));
+        if (cs == LSM_OK && !degenerate && cr.trim1_mm < prev->g.len && cr.trim2_mm < g->len && cr.trim1_mm <= room) {
             g1 = prev->g;
-            if (lsm_geom_trim_end(&g1, cr.trim1_mm) == LSM_OK && lsm_geom_trim_start(g, cr.trim2_mm) == LSM_OK &&
-                g1.len > R0 && g->len > R0)
+            lsm_geom g2 = *g;
+            if (lsm_geom_trim_end(&g1, cr.trim1_mm) == LSM_OK && lsm_geom_trim_start(&g2, cr.trim2_mm) == LSM_OK &&
+                g1.len > R0 && g2.len > R0) {
                 corner = true;
-            else
-                flags |= LSM_PB_STOP; /* g may have been trimmed: it still starts on the previous path */
+                *g = g2;
+            } else {
+                flags |= LSM_PB_STOP;
+            }
         } else if (cs == LSM_E_COLLINEAR) {
             /* already G2 */
         } else {
@@ -492,6 +479,7 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     if ((flags & LSM_PB_STOP) && has_prev)
         pl->stats.corner_stops++;
     if (corner) {
+        prev_orig = prev->g;
         prev->g = g1;
         block_coef(pl, prev);
         push_block(pl, &cr.trans[0], feed, mv->seq, (uint8_t)(LSM_PB_CORNER | (flags & LSM_PB_RAPID)));
@@ -537,6 +525,21 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     }
     pl->gen++;
     backward_pass(pl);
+    if (has_prev && !(flags & LSM_PB_STOP) && !horizon_feasible(pl)) {
+        /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
+         * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
+        pl->tail -= corner ? 3u : 1u;
+        if (corner) {
+            prev->g = prev_orig;
+            block_coef(pl, prev);
+            pl->stats.corners--;
+        }
+        push_block(pl, &g_orig, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
+        pl->stats.corner_stops++;
+        pl->stats.horizon_stops++;
+        pl->full_pass = 1;
+        backward_pass(pl);
+    }
     return LSM_OK;
 }
 
@@ -819,12 +822,13 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
     return LSM_OK;
 }
 
-void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm)
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s)
 {
     if (pl == NULL)
         return;
     pl->horizon_blk = id;
     pl->horizon_off = off_mm;
+    pl->horizon_v = v_mm_s > R0 ? v_mm_s : R0;
 }
 
 void lsm_planner_release(lsm_planner *pl, uint32_t id)
@@ -1269,8 +1273,6 @@ static bool fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
         rcheck c;
         lsm_real xs;
         const int t = tune_ramp(pc, r, v0, v1, true, xe, X0, X1, &xs, &c);
-        PLV("  fit_decel it %d t %d xe %.6f dist %.6f X0 %.6f X1 %.6f vviol %d vx0 %.6f vcap %.6f ra %.3g rj %.3g rs %.3g lim %.1f %.1f %.1f\n", it, t, (double)xe, (double)r->dist, (double)X0, (double)X1,
-            c.vviol, (double)c.vx0, (double)c.vcap, (double)c.ra, (double)c.rj, (double)c.rs, (double)r->a_lim, (double)r->j_lim, (double)r->s_lim);
         if (t == 0)
             return false;
         if (t < 0) {
@@ -1289,14 +1291,10 @@ static bool fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
                 return false;
             continue;
         }
-        if (check_lead && !region_ok(pc, X0, xs, v0)) {
-            PLV("  lead region fails\n");
+        if (check_lead && !region_ok(pc, X0, xs, v0))
             return false;
-        }
-        if (!region_ok(pc, xs + r->dist, X1, v1)) {
-            PLV("  trail region fails %.6f %.6f v1 %.6f cap %.6f\n", (double)(xs + r->dist), (double)X1, (double)v1, (double)range_cap(pc, xs + r->dist, X1));
+        if (!region_ok(pc, xs + r->dist, X1, v1))
             return false;
-        }
         *xs_out = xs;
         return true;
     }
@@ -1454,7 +1452,7 @@ static int vstep(vstate *s, uint32_t id, lsm_real c, lsm_real h, lsm_real drop, 
  * those of the envelope, and keeps the detection local (a node depends only on the caps after it, never on the
  * interpolator's position or on other nodes).
  */
-#define ERODE_CYCLES 8
+#define ERODE_CYCLES 4
 static lsm_real min_cap_ahead(const lsm_planner *pl, uint32_t id, lsm_real d)
 {
     lsm_real m = cap_of(pl, id), x = blk(pl, id)->g.len;
@@ -1524,8 +1522,10 @@ static void backward_pass(lsm_planner *pl)
         n_id = node;
         n_w = w;
         n_exact = (nb->flags & LSM_PB_STOP) != 0;
-        if (same)
+        if (same) {
+            pl->bp_stop = node;
             return; /* everything before is unchanged */
+        }
         /* restart the detection just before the node and walk again down to k */
         vreset(&vs);
         k = node;
@@ -1534,6 +1534,7 @@ static void backward_pass(lsm_planner *pl)
     for (uint32_t q = pl->head; q != n_id; q++)
         blk(pl, q)->flags &= (uint8_t)~LSM_PB_NODE;
     pl->full_pass = 0;
+    pl->bp_stop = pl->head;
 }
 
 void lsm_planner_update(lsm_planner *pl)
@@ -1569,13 +1570,26 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
         const lsm_real s = c.as > R0 ? LSM_R(0.5) / c.as : LSM_R(1e18);
         if (v_now > R0 && ramp_plan(&r, pl->cfg.cycle_s, v_now, R0, a, j, s))
             need = LSM_R(2.0) * r.dist + LSM_R(4.0) * v_now * pl->cfg.cycle_s;
-        uint32_t id = cur;
-        lsm_real d = R0;
-        while (id != pl->tail && d <= need) {
-            d += blk(pl, id)->g.len;
-            id++;
+        /* the switch must leave a verified piece from the interpolator's commitment point (catching up with
+         * the lower caps): further out until it does; at worst only blocks appended later get the new factor */
+        for (int tries = 0;; tries++) {
+            uint32_t id = cur;
+            lsm_real d = R0;
+            while (id != pl->tail && d <= need) {
+                d += blk(pl, id)->g.len;
+                id++;
+            }
+            if (tries >= 8)
+                id = pl->tail;
+            pl->ovr_switch = id;
+            pl->full_pass = 1;
+            pl->gen++;
+            backward_pass(pl);
+            if (id == pl->tail || horizon_feasible(pl))
+                break;
+            need = LSM_R(2.0) * need + blk(pl, cur)->g.len;
         }
-        pl->ovr_switch = id;
+        return LSM_OK;
     }
     pl->full_pass = 1;
     pl->gen++;
@@ -1587,6 +1601,7 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
 /* pieces                                                                                                        */
 
 typedef struct plan5 {
+    bool step;        /* ramp A is one step of a staircase (the interpolator re-plans at its end) */
     lsm_real v0, vc, v1;
     ramp A, B;
     lsm_real xA, xB;  /* ramp starts (piece-relative); lead cruise [0, xA], cruise [xA + A.dist, xB],
@@ -1675,6 +1690,7 @@ static void fill_piece(const lsm_planner *pl, const pctx *ctx, const plan5 *p, l
     out->vc_mm_s = p->vc;
     out->end_blk = ctx->id_end;
     out->stop = p->v1 > R0 ? 0u : 1u;
+    out->step = p->step ? 1u : 0u;
     const lsm_real xa_end = p->xA + p->A.dist, xb_end = p->xB + p->B.dist;
     put_cruise(out, 0, p->xA, p->v0);
     put_ramp(out, 1, &p->A, dt);
@@ -1690,6 +1706,8 @@ static void fill_piece(const lsm_planner *pl, const pctx *ctx, const plan5 *p, l
         out->st[i].j_mm_s3 = R0;
         if (i == 0 || i == 8 || i == 16) { /* cruises run at exactly their feed */
             const lsm_real v = i == 0 ? p->v0 : i == 8 ? p->vc : p->v1;
+            if (i > 0) /* up to where the next ramp (or the end) is planned: the phases add up to the piece */
+                put_cruise(out, i, (i == 8 ? p->xB : end_x) - k.s_mm, v);
             out->st[i].v_mm_s = v;
             out->st[i].a_mm_s2 = R0;
             k.v_mm_s = v;
@@ -1758,6 +1776,75 @@ static lsm_status fallback(lsm_planner *pl, pctx *pc, lsm_real v0, lsm_piece *ou
     return LSM_E_INTERNAL;
 }
 
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp);
+
+/* Time from the piece start to x (>= the end of ramp A, <= the start of ramp B) along p. */
+static lsm_real time_to(const plan5 *p, lsm_real dt, lsm_real x)
+{
+    const lsm_real xa_end = p->xA + p->A.dist;
+    lsm_real t = (lsm_real)lsm_scurve_total_cycles(&p->A.iv) * dt;
+    if (p->xA > R0 && p->v0 > R0)
+        t += p->xA / p->v0;
+    if (x > xa_end && p->vc > R0)
+        t += (x - xa_end) / p->vc;
+    return t;
+}
+
+/*
+ * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
+ * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
+ * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
+ * (a = 0 there, lsm_piece.step), a second one up to the same cruise. For a few lower cruises (geometric levels
+ * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
+ * (or the end of the first plan's ramp) sooner than the single ramp.
+ */
+static void staircase(pctx *pc, plan5 *best)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    const lsm_real v0 = best->v0, vmax = best->vc;
+    if (!(vmax > v0 * LSM_R(1.2) + LSM_R(1e-6)) || best->xB < best->xA + best->A.dist)
+        return;
+    const bool exact = !(best->v1 > R0);
+    const lsm_real xe = best->xA + best->A.dist;
+    lsm_real gain = R0;
+    plan5 p, q, found;
+    memset(&found, 0, sizeof found);
+    bool have = false;
+    const lsm_real k = LSM_R(0.6);
+    lsm_real dv = (vmax - v0) * k;
+    for (int it = 0; it < STAIR_LEVELS; it++, dv *= k) {
+        const lsm_real vc = v0 + dv;
+        if (!(vc > v0 * (R1 + LSM_R(0.02))))
+            break;
+        if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
+            continue;
+        const lsm_real x1 = p.xA + p.A.dist;
+        if (!(x1 < best->xB))
+            continue;
+        /* the second ramp, from the end of the first one */
+        seek(pc, x1);
+        pctx sub;
+        pctx_init(&sub, pc->pl, pc->cid, x1 - pc->cx, pc->id_end);
+        if (!(sub.D > LEN_EPS * (R1 + sub.D)) ||
+            !feas5(&sub, vc, vmax, lsm_min2(best->v1, vmax), exact, false, &q))
+            continue;
+        const lsm_real x2 = x1 + q.xA + q.A.dist;
+        const lsm_real X = lsm_max2(x2, xe);
+        if (!(X <= best->xB) || !(X - x1 <= q.xB))
+            continue;
+        const lsm_real g = time_to(best, dt, X) - (time_to(&p, dt, x1) + time_to(&q, dt, X - x1));
+        if (g > gain + LSM_R(2.0) * dt) {
+            gain = g;
+            found = p;
+            have = true;
+        }
+    }
+    if (have) {
+        found.step = true;
+        *best = found;
+    }
+}
+
 lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, lsm_piece_mode mode,
                                   lsm_piece *out)
 {
@@ -1769,8 +1856,12 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
     plan5 p;
     memset(&p, 0, sizeof p);
     if (mode == LSM_PIECE_HOLD) {
+        /* within the path up to the next exact stop (a corner the machine cannot pass at speed) */
+        uint32_t id_end = id0 + 1u;
+        while (id_end != pl->tail && !(blk(pl, id_end)->flags & LSM_PB_STOP))
+            id_end++;
         pctx pc;
-        pctx_init(&pc, pl, id0, off0, pl->tail);
+        pctx_init(&pc, pl, id0, off0, id_end);
         p.v0 = p.vc = v0;
         p.v1 = R0;
         no_ramp(&p.A, dt, v0);
@@ -1784,21 +1875,39 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
     }
     if (off0 >= blk(pl, id0)->g.len && id0 + 1u == pl->tail)
         return LSM_E_EMPTY;
+    pctx pc;
+    plan5 best;
+    if (!plan_normal(pl, id0, off0, v0, &pc, &best))
+        return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+    fill_piece(pl, &pc, &best, pc.D, out);
+    pl->stats.pieces++;
+    return LSM_OK;
+}
+
+/* The NORMAL piece from (id0, off0) at v0 (a = 0): true and the plan, or false (pc: the last piece tried). */
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp)
+{
     /* to the next node; if no verified piece reaches it, to the one after (its dip then lies inside the piece,
      * verified pointwise), and so on: a node that appeared ahead since the speed was committed cannot trap it */
     lsm_real w1 = R0;
     uint32_t id_end = id0;
     pctx pc;
     bool have = false, exact = false, catchup = false;
-    plan5 best;
+    plan5 best, p;
+    memset(&p, 0, sizeof p);
+    memset(&best, 0, sizeof best);
     lsm_real v1 = R0;
-    for (int cand = 0; cand < 4 && !have; cand++) {
-        if (id_end == pl->tail || (cand > 0 && (blk(pl, id_end)->flags & LSM_PB_STOP)))
+    bool skipped_here = false;
+    for (int cand = 0; cand < 5 && !have; cand++) {
+        if (id_end == pl->tail || (cand > 0 && !skipped_here && (blk(pl, id_end)->flags & LSM_PB_STOP)))
             break;
         id_end = node_after(pl, id_end, &w1);
         pctx_init(&pc, pl, id0, off0, id_end);
-        if (!(pc.D > LEN_EPS * (R1 + pc.D))) /* a node right here: the next one */
+        skipped_here = false;
+        if (!(pc.D > LEN_EPS * (R1 + pc.D))) { /* a node right here (we stand on it): the next one */
+            skipped_here = true;
             continue;
+        }
         exact = !(w1 > R0);
         /* catch-up: the current speed is above the caps right here (override lowered) */
         catchup = v0 > range_cap(&pc, R0, R0) * (R1 + CAP_SLACK);
@@ -1873,17 +1982,32 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
             }
         }
     }
-    if (!have) {
-#ifdef LSM_PL_DEBUG
-        pl_verbose = 1;
-        feas5(&pc, v0, lsm_max2(v0, v1), v1, exact, catchup, &p);
-        pl_verbose = 0;
-#endif
-        PLDBG("FALLBACK id0 %u off %.6f v0 %.6f w1 %.6f v1 %.6f id_end %u D %.6f exact %d catchup %d\n", (unsigned)id0,
-              (double)off0, (double)v0, (double)w1, (double)v1, (unsigned)id_end, (double)pc.D, exact, catchup);
-        return fallback(pl, &pc, v0, out);
+    if (have && !catchup)
+        staircase(&pc, &best);
+    *pcp = pc;
+    if (have)
+        *bestp = best;
+    return have;
+}
+
+/* After a corner trimmed the last block: does a verified piece still start at the interpolator's commitment
+ * point (planner.h, lsm_planner_set_horizon)? The backward pass that stopped at an unchanged node after that
+ * point left the piece from there unchanged: nothing to check. */
+static bool horizon_feasible(lsm_planner *pl)
+{
+    uint32_t id = pl->horizon_blk;
+    lsm_real off = pl->horizon_off;
+    if (!(pl->horizon_v > R0) || id_lt(id, pl->head) || !id_lt(id, pl->tail))
+        return true;
+    if (id_lt(id, pl->bp_stop))
+        return true;
+    while (off > blk(pl, id)->g.len && id + 1u != pl->tail) {
+        off -= blk(pl, id)->g.len;
+        id++;
     }
-    fill_piece(pl, &pc, &best, pc.D, out);
-    pl->stats.pieces++;
-    return LSM_OK;
+    if (off >= blk(pl, id)->g.len && id + 1u == pl->tail)
+        return false; /* moving at the very end of the buffer */
+    pctx pc;
+    plan5 p;
+    return plan_normal(pl, id, off, pl->horizon_v, &pc, &p);
 }

@@ -52,8 +52,22 @@
  *    every node at or below its W the machine can stop within the buffered blocks: a buffer underrun is a clean
  *    stop. The pass stops as soon as a node's W does not change (bounded, incremental replanning).
  *  - Forward step (when the interpolator needs the next piece): v1 = min(W of the next node, what one ramp from v0
- *    can reach), then the highest cruise vc whose ramps verify. Only the current ramp is ever committed: during
- *    cruises the interpolator re-plans when blocks arrive or the override changes.
+ *    can reach), then the highest cruise vc whose ramps verify. One ramp up to that cruise must fit every block
+ *    it crosses (out of a curved valley: lowered limits, or a late start); when a lower ramp followed by a
+ *    second one planned from its end reaches the same cruise sooner, the lower one is taken as one step of a
+ *    staircase (lsm_piece.step): the interpolator re-plans at the end of its ramp A and climbs on (if no new
+ *    piece is found there, the step piece itself is complete and verified).
+ *  - Commitment. Only the current ramp is ever committed: the interpolator re-plans (a = 0) in cruises and
+ *    exactly at the end of a ramp when blocks arrived or the override changed, and it tells the planner that
+ *    point and its speed there (lsm_planner_set_horizon). An append changes nothing before it, and after the
+ *    backward pass a verified piece from that point at that speed must still exist: if it does not (the new
+ *    block, or the trim of its corner, took room the machine needs to slow down), the junction becomes an exact
+ *    stop instead, which restores the previous plan (it stopped there) (stats.horizon_stops). A lower override
+ *    applies from a block far enough out that the same holds (at worst, to blocks appended later only).
+ *    Hence a buffer underrun is a clean, verified stop on the path, and the interpolator starts again by itself
+ *    when blocks are appended behind it.
+ *  - Feed hold: one verified ramp to rest, started at the next point where a = 0, within the path up to the
+ *    next exact stop (else the current plan, which stops there, is followed and the hold takes effect there).
  *  - Every piece ends exactly on its end point, so stops (exact stop, end of buffer, end of program) land exactly
  *    on their point and the next piece starts exactly where the certificate of its node was computed.
  *
@@ -65,7 +79,10 @@
  * transitions would limit the feed; those points wait in the planner until their run ends (or flush / finish).
  * Append validates its input first and changes nothing on error: no accepted block is ever lost.
  *
- * Memory: caller-owned block storage (lsm_pblock, 96 bytes in the float build) and the lsm_planner object.
+ * Dense G1 points are fitted with arcs only where the arc's evaluation error (about R eps of lsm_real) stays far
+ * below the tolerance (float builds: radius up to ~40 mm at a 0.01 mm fit tolerance; larger radii are lines).
+ * Memory: caller-owned block storage (lsm_pblock, 92 bytes in the float build, 168 in double) and the
+ * lsm_planner object. User documentation: docs/planner.md.
  * Units: mm, s, rad (rotary axes), and their derivatives; a rotary-only line uses rad as its path unit.
  */
 #ifndef LSM_PLANNER_H
@@ -168,7 +185,8 @@ typedef struct lsm_piece {
     lsm_real T_s;                          /* duration */
     uint8_t stop;                          /* ends with v = 0 */
     uint8_t hold;                          /* a feed-hold stop (ends anywhere) */
-    uint8_t reserved[2];
+    uint8_t step;                          /* ramp A is a step of a staircase: re-plan at its end */
+    uint8_t reserved;
     lsm_piece_phase ph[LSM_PIECE_PHASES];  /* lead cruise, ramp A (7), cruise, ramp B (7), trail cruise */
     lsm_kin st[LSM_PIECE_PHASES];          /* state at each phase start (s piece-relative) */
 } lsm_piece;
@@ -177,6 +195,7 @@ typedef struct lsm_planner_stats {
     uint32_t appended;        /* blocks accepted by append */
     uint32_t corners;         /* corners smoothed with a clothoid pair */
     uint32_t corner_stops;    /* corners where the machine must stop */
+    uint32_t horizon_stops;   /* of these: junctions made exact stops because the interpolator was too close */
     uint32_t pieces;          /* pieces planned */
     uint32_t plan_fallbacks;  /* pieces that needed the conservative fallback (should stay 0) */
     uint32_t checks;          /* ramp verifications (cost indicator) */
@@ -198,8 +217,10 @@ typedef struct lsm_planner {
     uint8_t reserved;
     lsm_real ovr_near, ovr_far; /* feed override (factor) for blocks below / from ovr_switch */
     uint32_t ovr_switch;
-    uint32_t horizon_blk;       /* the interpolator is committed up to here (block id, offset) */
-    lsm_real horizon_off;
+    uint32_t horizon_blk;       /* the interpolator is committed up to here (block id, offset), where it will */
+    lsm_real horizon_off;       /* be able to re-plan (a = 0) at speed horizon_v */
+    lsm_real horizon_v;
+    uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */
     uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
     /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */
     lsm_arcfit_pt fit_pt[LSM_ARCFIT_MAX];
@@ -269,20 +290,24 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real factor, uint32_t c
 
 typedef enum lsm_piece_mode {
     LSM_PIECE_NORMAL = 0, /* to the next node at the best feed */
-    LSM_PIECE_HOLD = 1    /* stop as soon as possible (feed hold) */
+    LSM_PIECE_HOLD = 1,   /* stop as soon as possible (feed hold) */
+    LSM_PIECE_REPLAN = 2  /* as NORMAL, for a piece that replaces one still valid: no fallback, LSM_E_INFEASIBLE */
 } lsm_piece_mode;
 
 /*
- * Plan the piece that starts at (blk, off_mm) with speed v0_mm_s (a = 0 there). Runs the pending backward pass
- * first. Errors: LSM_E_NULL, LSM_E_EMPTY (nothing to move: at the end of the buffer), LSM_E_INFEASIBLE (HOLD:
- * no stop fits yet; follow the current plan and retry), LSM_E_INTERNAL (no verified plan; a fallback piece that
- * stops is returned and counted in stats.plan_fallbacks).
+ * Plan the piece that starts at (blk, off_mm) with speed v0_mm_s (a = 0 there). Errors: LSM_E_NULL,
+ * LSM_E_EMPTY (nothing to move: at the end of the buffer), LSM_E_INFEASIBLE (HOLD: no stop fits yet; REPLAN: no
+ * verified piece found; follow the current plan and retry), LSM_E_INTERNAL (NORMAL: no verified plan; a fallback
+ * piece that stops is returned and counted in stats.plan_fallbacks).
  */
 lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
                                   lsm_piece_mode mode, lsm_piece *out);
 
-/* The interpolator is committed up to (blk, off_mm): the planner modifies nothing before that. */
-void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm);
+/* The interpolator is committed up to (blk, off_mm), the first point where it can take a new piece (a = 0), at
+ * speed v_mm_s there: the planner modifies nothing before that point, and a corner transition that trims the last
+ * block is only kept if a verified piece from that point at that speed still exists (else the corner becomes an
+ * exact stop). */
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s);
 
 /* Blocks before id `blk` are no longer needed (their slots are freed). */
 void lsm_planner_release(lsm_planner *pl, uint32_t blk);

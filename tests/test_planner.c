@@ -1,0 +1,780 @@
+/*
+ * test_planner.c: the look-ahead planner and the interpolator (planner.h, interp.h), double and float builds.
+ *
+ *   test_planner [seed] [count]      (default: seed 1, count 24 random programs per scenario)
+ *
+ * Every random program is run cycle by cycle through the interpolator while its blocks are appended (streaming,
+ * a small look-ahead so that the buffer wraps and runs low), and checked from the setpoints alone:
+ *   - per axis, |dq|/dt, |d²q|/dt², |d³q|/dt³ (backward differences, at rest before and after, Beudaert eq 6)
+ *     within 1e-6 relative of the axis limits (float: plus the rounding of the float positions, 8 ulp / dt³ for
+ *     the jerk, stated below);
+ *   - the distance of every 3rd setpoint from the programmed path within the largest blend tolerance of the
+ *     program (G61-only programs: on the path), the path followed in program order (closed-form distances to
+ *     lines and planar arcs), so that a path passing over itself is measured against the right pass;
+ *   - the last setpoint is the programmed end point, exactly;
+ *   - the run ends (no stall) and no piece needed the planner's fallback.
+ * Scenarios: lines, arcs (G17/18/19, helical), mixed with exact stops, dense short segments (CAM polylines),
+ * feed hold and resume, override changes, slow appending (buffer underruns), and a resume after an underrun stop
+ * (blocks appended while the machine stands IDLE start it again by itself). Bad blocks are rejected with their
+ * codes and nothing already accepted is lost. Soak: e.g. `test_planner 7 240` (10x the CI count).
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "interp.h"
+#include "lsm_test_rng.h"
+#include "planner.h"
+
+static unsigned long g_seed = 1;
+static long g_count = 24;
+
+#if LSM_REAL_IS_FLOAT
+#define CYCLE 0.004   /* float positions: a longer cycle keeps the rounding noise of the 3rd difference small */
+#define SPAN 20.0     /* workspace half-width (mm) */
+#else
+#define CYCLE 0.001
+#define SPAN 150.0
+#endif
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* programs                                                                                                    */
+
+typedef struct cmd {
+    int arc;                 /* 0 line, 1 arc */
+    double end[LSM_MAX_AXES];
+    double centre[3];
+    int plane, dir;
+    double feed, tol;
+    int rapid;
+} cmd;
+
+typedef struct prog {
+    cmd c[1200];
+    int n;
+    double start[LSM_MAX_AXES];
+    double end[LSM_MAX_AXES];
+    double max_tol;
+    lsm_geom path[1200];     /* programmed elements (for the deviation) */
+} prog;
+
+static double urand(uint64_t *s, double lo, double hi)
+{
+    return lo + (hi - lo) * test_urand(s);
+}
+
+static void push_line(prog *p, double *pos, const double *to, double feed, double tol, int rapid)
+{
+    cmd *c = &p->c[p->n++];
+    memset(c, 0, sizeof *c);
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        c->end[i] = to[i];
+    c->feed = feed;
+    c->tol = tol;
+    c->rapid = rapid;
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        pos[i] = to[i];
+}
+
+static void clampw(double *x)
+{
+    for (int i = 0; i < 3; i++) {
+        if (x[i] > SPAN)
+            x[i] = SPAN;
+        if (x[i] < -SPAN)
+            x[i] = -SPAN;
+    }
+}
+
+/* kind: 0 lines, 1 arcs, 2 mixed (with exact stops), 3 dense polylines */
+static void gen(prog *p, uint64_t *rs, int kind)
+{
+    memset(p, 0, sizeof *p);
+    double pos[LSM_MAX_AXES] = {0};
+    const int nseg = kind == 3 ? 4 : 6 + (int)(test_urand(rs) * 10);
+    double tol = test_urand(rs) < 0.15 ? 0 : urand(rs, 0.003, 0.05);
+    for (int k = 0; k < nseg && p->n < 1100; k++) {
+        const double feed = test_logu(rs, 3, 150) * (SPAN / 150.0 + 0.5);
+        if (kind == 2 && test_urand(rs) < 0.3)
+            tol = test_urand(rs) < 0.4 ? 0 : urand(rs, 0.003, 0.05);
+        p->max_tol = fmax(p->max_tol, tol);
+        int arc = kind == 1 || (kind == 2 && test_urand(rs) < 0.4);
+        if (kind == 3) {
+            /* a dense polyline on a circle or a wave: 40 .. 200 points, 0.05 .. 0.3 mm apart */
+            const int npts = 40 + (int)(test_urand(rs) * 160);
+            const double h = urand(rs, 0.05, 0.3);
+            const double R = urand(rs, 2, 30) * SPAN / 150.0 + 1.0;
+            const double a0 = urand(rs, 0, 6.28), dir = test_urand(rs) < 0.5 ? 1 : -1;
+            const int wave = test_urand(rs) < 0.5;
+            const double c0[3] = {pos[0] - R * cos(a0), pos[1] - R * sin(a0), pos[2]};
+            const double ang = urand(rs, 0, 6.28);
+            for (int i = 1; i <= npts && p->n < 1100; i++) {
+                double to[LSM_MAX_AXES];
+                memcpy(to, pos, sizeof to);
+                if (wave) {
+                    const double x = h * i;
+                    to[0] = c0[0] + R * cos(a0) + x * cos(ang) - 0.5 * R * sin(x / R) * sin(ang) * 0.3;
+                    to[1] = c0[1] + R * sin(a0) + x * sin(ang) + 0.5 * R * sin(x / R) * cos(ang) * 0.3;
+                    to[2] = pos[2] + (test_urand(rs) < 0.5 ? 0.0 : 0.0);
+                } else {
+                    const double a = a0 + dir * h * i / R;
+                    to[0] = c0[0] + R * cos(a);
+                    to[1] = c0[1] + R * sin(a);
+                }
+                to[0] = round(to[0] * 1e4) / 1e4; /* as a CAM file would print them */
+                to[1] = round(to[1] * 1e4) / 1e4;
+                clampw(to);
+                if (fabs(to[0] - pos[0]) + fabs(to[1] - pos[1]) < 1e-3)
+                    continue;
+                push_line(p, pos, to, feed, tol, 0);
+            }
+            continue;
+        }
+        if (!arc) {
+            double to[LSM_MAX_AXES];
+            memcpy(to, pos, sizeof to);
+            const double len = test_logu(rs, 0.2, 30) * SPAN / 150.0 + 0.05;
+            double d[3] = {urand(rs, -1, 1), urand(rs, -1, 1), test_urand(rs) < 0.5 ? 0 : urand(rs, -1, 1)};
+            if (test_urand(rs) < 0.3) { /* along an axis */
+                const int ax = (int)(test_urand(rs) * 3);
+                d[0] = d[1] = d[2] = 0;
+                d[ax] = test_urand(rs) < 0.5 ? -1 : 1;
+            }
+            const double dl = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) + 1e-12;
+            for (int i = 0; i < 3; i++)
+                to[i] = pos[i] + d[i] / dl * len;
+            clampw(to);
+            if (fabs(to[0] - pos[0]) + fabs(to[1] - pos[1]) + fabs(to[2] - pos[2]) < 1e-3)
+                continue;
+            push_line(p, pos, to, feed, tol, test_urand(rs) < 0.08);
+        } else {
+            const int planes[3] = {17, 18, 19};
+            const int pl = planes[(int)(test_urand(rs) * 3)];
+            const int u = pl == 17 ? 0 : pl == 18 ? 2 : 1, v = pl == 17 ? 1 : pl == 18 ? 0 : 2, w = 3 - u - v;
+            const double R = test_logu(rs, 0.5, 30) * SPAN / 150.0 + 0.3;
+            const double a0 = urand(rs, 0, 6.28), sweep = urand(rs, 0.2, 4.5);
+            const int dir = test_urand(rs) < 0.5 ? 1 : -1;
+            cmd *c = &p->c[p->n++];
+            memset(c, 0, sizeof *c);
+            c->arc = 1;
+            c->plane = pl;
+            c->dir = dir;
+            c->feed = feed;
+            c->tol = tol;
+            c->centre[u] = pos[u] - R * cos(a0);
+            c->centre[v] = pos[v] - R * sin(a0);
+            c->centre[w] = pos[w];
+            const double a1 = a0 + dir * sweep;
+            memcpy(c->end, pos, sizeof c->end);
+            c->end[u] = c->centre[u] + R * cos(a1);
+            c->end[v] = c->centre[v] + R * sin(a1);
+            c->end[w] = pos[w] + (test_urand(rs) < 0.3 ? urand(rs, -2, 2) * SPAN / 150.0 : 0.0);
+            for (int i = 0; i < LSM_MAX_AXES; i++)
+                pos[i] = c->end[i];
+        }
+    }
+    memcpy(p->end, pos, sizeof p->end);
+    /* programmed path elements */
+    double at[LSM_MAX_AXES] = {0};
+    for (int k = 0; k < p->n; k++) {
+        const cmd *c = &p->c[k];
+        lsm_real a[LSM_MAX_AXES], b[LSM_MAX_AXES];
+        for (int i = 0; i < LSM_MAX_AXES; i++) {
+            a[i] = (lsm_real)at[i];
+            b[i] = (lsm_real)c->end[i];
+        }
+        if (c->arc) {
+            const lsm_real cc[3] = {(lsm_real)c->centre[0], (lsm_real)c->centre[1], (lsm_real)c->centre[2]};
+            lsm_geom_arc_init(&p->path[k], a, b, cc, (lsm_geom_plane)c->plane, c->dir, 0);
+        } else {
+            lsm_geom_line_init(&p->path[k], a, b);
+        }
+        memcpy(at, c->end, sizeof at);
+    }
+}
+
+static lsm_status append_cmd(lsm_planner *pl, const cmd *c)
+{
+    lsm_planner_move mv;
+    memset(&mv, 0, sizeof mv);
+    mv.feed_mm_s = (lsm_real)c->feed;
+    mv.tol_mm = (lsm_real)c->tol;
+    mv.rapid = (uint8_t)c->rapid;
+    if (c->arc) {
+        const lsm_real e[3] = {(lsm_real)c->end[0], (lsm_real)c->end[1], (lsm_real)c->end[2]};
+        const lsm_real cc[3] = {(lsm_real)c->centre[0], (lsm_real)c->centre[1], (lsm_real)c->centre[2]};
+        return lsm_planner_append_arc(pl, e, cc, (lsm_geom_plane)c->plane, c->dir, 0, &mv);
+    }
+    lsm_real e[LSM_MAX_AXES];
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        e[i] = (lsm_real)c->end[i];
+    return lsm_planner_append_line(pl, e, &mv);
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* running and measuring                                                                                       */
+
+static void config(lsm_planner_config *cfg)
+{
+    lsm_planner_default_config(cfg);
+    cfg->cycle_s = (lsm_real)CYCLE;
+    cfg->axis_mask = 0x07;
+    const double v[3] = {250, 200, 100}, a[3] = {3000, 2000, 1500}, j[3] = {60000, 40000, 30000};
+    for (int i = 0; i < 3; i++) {
+        cfg->axis[i].v_max = (lsm_real)v[i];
+        cfg->axis[i].a_max = (lsm_real)a[i];
+        cfg->axis[i].j_max = (lsm_real)j[i];
+        cfg->axis[i].snap_max = (lsm_real)(LSM_PI * j[i] / (2 * 0.008)); /* jerk rise in 8 ms */
+    }
+}
+
+typedef struct run_opts {
+    uint32_t capacity;
+    int feed_every;          /* > 0: one block every this many cycles (underruns) */
+    long hold_at, resume_at; /* cycles (-1: none) */
+    int n_ovr;
+    long ovr_at[4];
+    double ovr_val[4];
+} run_opts;
+
+typedef struct run_res {
+    double *q;
+    long n;
+    int done;
+    double vmax[3], amax[3], jmax[3];
+    double max_dev;
+    double held_motion;      /* largest move while held */
+    long held_cycles;
+    uint32_t fallbacks, underruns;
+} run_res;
+
+static double dist_geom(const lsm_geom *g, const double x[3])
+{
+    if (g->kind == LSM_GEOM_LINE) { /* closed form: distance to the segment */
+        const double L = (double)g->len;
+        double t = 0, d2 = 0;
+        for (int i = 0; i < 3; i++)
+            t += (x[i] - (double)g->u.line.p0[i]) * (double)g->u.line.dir[i];
+        t = fmin(L, fmax(0, t));
+        for (int i = 0; i < 3; i++) {
+            const double e = x[i] - ((double)g->u.line.p0[i] + (double)g->u.line.dir[i] * t);
+            d2 += e * e;
+        }
+        return sqrt(d2);
+    }
+    if (g->kind == LSM_GEOM_ARC && g->u.arc.axial_mm == 0) { /* closed form: planar arc */
+        const lsm_geom_arc *a = &g->u.arc;
+        const double n[3] = {(double)a->e1[1] * (double)a->e2[2] - (double)a->e1[2] * (double)a->e2[1],
+                             (double)a->e1[2] * (double)a->e2[0] - (double)a->e1[0] * (double)a->e2[2],
+                             (double)a->e1[0] * (double)a->e2[1] - (double)a->e1[1] * (double)a->e2[0]};
+        double u = 0, v = 0, z = 0;
+        for (int i = 0; i < 3; i++) {
+            const double r = x[i] - (double)a->centre_mm[i];
+            u += r * (double)a->e1[i];
+            v += r * (double)a->e2[i];
+            z += r * n[i];
+        }
+        const double z2 = z * z, rho = sqrt(u * u + v * v), R = (double)a->radius_mm;
+        const double p0 = (double)a->phi0_rad, sw = (double)a->sweep_rad;
+        const double lo = fmin(p0, p0 + sw), hi = fmax(p0, p0 + sw);
+        double phi = atan2(v, u);
+        phi += 2 * LSM_PI * ceil((lo - phi) / (2 * LSM_PI)); /* the first angle >= lo */
+        if (phi <= hi || hi - lo >= 2 * LSM_PI)
+            return sqrt((rho - R) * (rho - R) + z2);
+        double best = INFINITY;
+        for (int k = 0; k < 2; k++) { /* outside the sweep: the nearer end */
+            const double q = k ? hi : lo, cu = R * cos(q), cv = R * sin(q);
+            best = fmin(best, sqrt((u - cu) * (u - cu) + (v - cv) * (v - cv) + z2));
+        }
+        return best;
+    }
+    /* sampled, then refined by golden section (the elements are lines and arcs) */
+    const int N = 64;
+    double best = INFINITY, bs = 0;
+    for (int k = 0; k <= N; k++) {
+        const double s = (double)g->len * k / N;
+        lsm_real q[LSM_MAX_AXES] = {0};
+        lsm_geom_eval(g, (lsm_real)s, q, NULL, NULL);
+        const double d = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
+        if (d < best) {
+            best = d;
+            bs = s;
+        }
+    }
+    double lo = fmax(0, bs - (double)g->len / N), hi = fmin((double)g->len, bs + (double)g->len / N);
+    for (int it = 0; it < 60; it++) {
+        const double m1 = lo + (hi - lo) * 0.382, m2 = lo + (hi - lo) * 0.618;
+        double d1, d2;
+        {
+            lsm_real q[LSM_MAX_AXES] = {0};
+            lsm_geom_eval(g, (lsm_real)m1, q, NULL, NULL);
+            d1 = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
+        }
+        {
+            lsm_real q[LSM_MAX_AXES] = {0};
+            lsm_geom_eval(g, (lsm_real)m2, q, NULL, NULL);
+            d2 = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
+        }
+        if (d1 < d2)
+            hi = m2;
+        else
+            lo = m1;
+        best = fmin(best, fmin(d1, d2));
+    }
+    return best;
+}
+
+static void run(const prog *p, const run_opts *o, run_res *r)
+{
+    memset(r, 0, sizeof *r);
+    lsm_planner_config cfg;
+    config(&cfg);
+    lsm_pblock *store = calloc(o->capacity, sizeof *store);
+    lsm_planner pl;
+    lsm_real st[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, o->capacity, st), LSM_OK);
+    lsm_interp ip;
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    long cap = 1 << 16;
+    r->q = malloc((size_t)cap * 3 * sizeof(double));
+    int next = 0, fin = 0;
+    const long max_cycles = (long)(600.0 / CYCLE);
+    int was_idle = 0;
+    for (long k = 0; k < max_cycles; k++) {
+        if (!fin) {
+            if (o->feed_every > 0) {
+                if (k % o->feed_every == 0 && next < p->n) {
+                    const lsm_status s = append_cmd(&pl, &p->c[next]);
+                    if (s == LSM_OK || s == LSM_E_ZERO_LENGTH)
+                        next++;
+                    else
+                        assert_int_equal(s, LSM_E_FULL);
+                }
+            } else {
+                while (next < p->n) {
+                    const lsm_status s = append_cmd(&pl, &p->c[next]);
+                    if (s == LSM_E_FULL)
+                        break;
+                    if (s != LSM_OK && s != LSM_E_ZERO_LENGTH)
+                        fail_msg("append %d: %s", next, lsm_status_str(s));
+                    next++;
+                }
+            }
+            if (next == p->n && lsm_planner_finish(&pl) == LSM_OK)
+                fin = 1;
+        }
+        if (k == o->hold_at)
+            lsm_interp_hold(&ip);
+        if (k == o->resume_at)
+            lsm_interp_resume(&ip);
+        for (int i = 0; i < o->n_ovr; i++)
+            if (k == o->ovr_at[i])
+                assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)o->ovr_val[i]), LSM_OK);
+        lsm_real pos[LSM_MAX_AXES];
+        const lsm_interp_state s = lsm_interp_step(&ip, pos);
+        if (r->n == cap) {
+            cap *= 2;
+            r->q = realloc(r->q, (size_t)cap * 3 * sizeof(double));
+        }
+        for (int i = 0; i < 3; i++)
+            r->q[3 * r->n + i] = (double)pos[i];
+        r->n++;
+        if (s == LSM_INTERP_HELD) {
+            r->held_cycles++;
+            if (r->n >= 2)
+                for (int i = 0; i < 3; i++)
+                    r->held_motion = fmax(r->held_motion, fabs(r->q[3 * (r->n - 1) + i] - r->q[3 * (r->n - 2) + i]));
+        }
+        if (s == LSM_INTERP_IDLE && !was_idle && k > 0)
+            r->underruns++;
+        was_idle = s == LSM_INTERP_IDLE;
+        if (s == LSM_INTERP_DONE) {
+            r->done = 1;
+            break;
+        }
+    }
+    r->fallbacks = pl.stats.plan_fallbacks;
+    if (!r->done && getenv("TEST_DUMP"))
+        print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u running %d\n",
+                      next, p->n, fin, ip.state, lsm_planner_count(&pl), lsm_planner_free(&pl), pl.fit_n, ip.blk,
+                      pl.head, pl.tail, ip.running);
+    if (!r->done && getenv("TEST_DUMP")) {
+        lsm_piece pc;
+        const lsm_status ps = lsm_planner_plan_piece(&pl, ip.blk, ip.off_mm, ip.v_mm_s, LSM_PIECE_NORMAL, &pc);
+        print_message("plan: %s T %g len %g off %g blk len %g v %g\n", lsm_status_str(ps), (double)pc.T_s,
+                      (double)pc.len_mm, (double)ip.off_mm, (double)lsm_planner_block(&pl, ip.blk)->g.len,
+                      (double)ip.v_mm_s);
+        for (uint32_t id = ip.blk; id != pl.tail && id < ip.blk + 6; id++)
+            print_message("  blk %u len %g flags %x cap %g w %g\n", id, (double)lsm_planner_block(&pl, id)->g.len,
+                          lsm_planner_block(&pl, id)->flags, (double)lsm_planner_block_cap(&pl, id),
+                          (double)lsm_planner_block(&pl, id)->w_mm_s);
+    }
+    if (getenv("TEST_DUMP")) {
+        long worst = 0;
+        double wj = 0;
+        for (long k = 3; k < r->n; k++)
+            for (int a = 0; a < 3; a++) {
+                const double j = fabs(r->q[3 * k + a] - 3 * r->q[3 * (k - 1) + a] + 3 * r->q[3 * (k - 2) + a] -
+                                      r->q[3 * (k - 3) + a]);
+                if (j > wj) {
+                    wj = j;
+                    worst = k;
+                }
+            }
+        print_message("worst jerk step %ld of %ld (d3 %.3g)\n", worst, r->n, wj);
+        for (long k = worst - 4; k <= worst + 2 && k < r->n; k++)
+            if (k >= 0)
+                print_message("  %ld: %.9f %.9f %.9f\n", k, r->q[3 * k], r->q[3 * k + 1], r->q[3 * k + 2]);
+    }
+    /* limits from the setpoints */
+    const double dt = CYCLE;
+    for (int a = 0; a < 3; a++) {
+        double q1 = 0, q2 = 0, q3 = 0;
+        for (long k = 0; k < r->n + 3; k++) {
+            const double q0 = k < r->n ? r->q[3 * k + a] : r->q[3 * (r->n - 1) + a];
+            r->vmax[a] = fmax(r->vmax[a], fabs(q0 - q1) / dt);
+            r->amax[a] = fmax(r->amax[a], fabs(q0 - 2 * q1 + q2) / (dt * dt));
+            r->jmax[a] = fmax(r->jmax[a], fabs(q0 - 3 * q1 + 3 * q2 - q3) / (dt * dt * dt));
+            q3 = q2;
+            q2 = q1;
+            q1 = q0;
+        }
+    }
+    /* deviation: every 3rd setpoint against the programmed elements near the tracked one. The window reaches
+     * well beyond the travel of 3 cycles at the highest axis speed (short segments: many of them); the tracker
+     * moves to the EARLIEST element within the tolerance of the setpoint, so that a path that comes back over
+     * itself (reversals, the clamped edges of the dense programs) is followed in order and never skips ahead to
+     * a later pass over the same place. */
+    int cur = 0;
+    const double reach = 2.0 * 250.0 * 3.0 * CYCLE + 2.0;
+    const double trk = p->max_tol * (1 + 1e-6) + (LSM_REAL_IS_FLOAT ? 2e-4 : 1e-7);
+    for (long k = 0; k < r->n; k += 3) {
+        const double *x = &r->q[3 * k];
+        double best = INFINITY, dl[4096];
+        int e0 = cur - 2 < 0 ? 0 : cur - 2, ne = 0;
+        double len = 0;
+        for (int e = e0; e < p->n && ne < 4096 && (ne < 40 || len < reach); e++, ne++) {
+            dl[ne] = dist_geom(&p->path[e], x);
+            best = fmin(best, dl[ne]);
+            len += (double)p->path[e].len;
+        }
+        int bi = cur;
+        for (int i = 0; i < ne; i++)
+            if (dl[i] <= fmax(best, trk)) {
+                bi = e0 + i;
+                break;
+            }
+        cur = bi > cur ? bi : cur;
+        r->max_dev = fmax(r->max_dev, best);
+    }
+    free(store);
+}
+
+/* Tolerances of the float build: rounding of positions of magnitude |q| <= SPAN in the differences. */
+static double noise(int order)
+{
+    if (!LSM_REAL_IS_FLOAT)
+        return 0;
+    const double ulp = SPAN * 1.2e-7;
+    const double k = order == 1 ? 2 : order == 2 ? 4 : 8;
+    return k * ulp / pow(CYCLE, order);
+}
+
+static void check_run(const prog *p, const run_res *r, const char *what, long c)
+{
+    lsm_planner_config cfg;
+    config(&cfg);
+    if (!r->done)
+        fail_msg("%s %ld (seed %lu): did not finish", what, c, g_seed);
+    for (int a = 0; a < 3; a++) {
+        const double vl = (double)cfg.axis[a].v_max, al = (double)cfg.axis[a].a_max, jl = (double)cfg.axis[a].j_max;
+        if (r->vmax[a] > vl * (1 + 1e-6) + noise(1) || r->amax[a] > al * (1 + 1e-6) + noise(2) ||
+            r->jmax[a] > jl * (1 + 1e-6) + noise(3))
+            fail_msg("%s %ld (seed %lu): axis %d v %.9g/%g a %.9g/%g j %.9g/%g", what, c, g_seed, a, r->vmax[a], vl,
+                     r->amax[a], al, r->jmax[a], jl);
+    }
+    const double devtol = p->max_tol * (1 + 1e-6) + (LSM_REAL_IS_FLOAT ? 2e-4 : 1e-7);
+    if (r->max_dev > devtol)
+        fail_msg("%s %ld (seed %lu): deviation %.6g > %.6g", what, c, g_seed, r->max_dev, devtol);
+    for (int i = 0; i < 3; i++) {
+        const double last = r->q[3 * (r->n - 1) + i], want = (double)(lsm_real)p->end[i];
+        if (last != want)
+            fail_msg("%s %ld (seed %lu): end axis %d %.17g != %.17g", what, c, g_seed, i, last, want);
+    }
+    if (r->fallbacks)
+        fail_msg("%s %ld (seed %lu): %u fallback pieces", what, c, g_seed, r->fallbacks);
+}
+
+static uint64_t rng(int salt)
+{
+    return 0x9E3779B97F4A7C15ull ^ ((uint64_t)g_seed * 0x100000001B3ull) ^ (uint64_t)salt;
+}
+
+static void scenario(int kind, const char *name, int mode)
+{
+    uint64_t rs = rng(kind * 131 + mode);
+    static prog p;
+    long ok = 0, underruns = 0, held = 0;
+    for (long c = 0; c < g_count; c++) {
+        gen(&p, &rs, kind);
+        if (p.n == 0)
+            continue;
+        run_opts o;
+        memset(&o, 0, sizeof o);
+        o.capacity = kind == 3 ? 256 : 16 + (uint32_t)(test_urand(&rs) * 64);
+        o.hold_at = o.resume_at = -1;
+        if (mode == 1) { /* hold and resume */
+            o.hold_at = 20 + (long)(test_urand(&rs) * 400);
+            o.resume_at = o.hold_at + 200 + (long)(test_urand(&rs) * 300);
+        } else if (mode == 2) { /* override changes */
+            o.n_ovr = 3;
+            for (int i = 0; i < 3; i++) {
+                o.ovr_at[i] = 10 + (long)(test_urand(&rs) * 1500);
+                o.ovr_val[i] = urand(&rs, 0.1, 2.0);
+            }
+        } else if (mode == 3) { /* slow appending */
+            o.feed_every = 5 + (int)(test_urand(&rs) * 40);
+            o.capacity = 32;
+        }
+        run_res r;
+        run(&p, &o, &r);
+        check_run(&p, &r, name, c);
+        if (mode == 1 && r.held_cycles > 0) {
+            held++;
+            if (r.held_motion != 0)
+                fail_msg("%s %ld: moved %.3g mm while held", name, c, r.held_motion);
+        }
+        underruns += r.underruns;
+        ok++;
+        free(r.q);
+    }
+    print_message("%s: %ld programs, %ld held, %ld underrun stops\n", name, ok, held, underruns);
+    assert_true(ok > 0);
+}
+
+static void test_lines(void **state)
+{
+    (void)state;
+    scenario(0, "lines", 0);
+}
+static void test_arcs(void **state)
+{
+    (void)state;
+    scenario(1, "arcs", 0);
+}
+static void test_mixed(void **state)
+{
+    (void)state;
+    scenario(2, "mixed", 0);
+}
+static void test_dense(void **state)
+{
+    (void)state;
+    scenario(3, "dense", 0);
+}
+static void test_hold_resume(void **state)
+{
+    (void)state;
+    scenario(2, "hold", 1);
+}
+static void test_override(void **state)
+{
+    (void)state;
+    scenario(2, "override", 2);
+}
+static void test_underrun(void **state)
+{
+    (void)state;
+    scenario(0, "underrun lines", 3);
+    scenario(3, "underrun dense", 3);
+}
+
+/* After an underrun stop (the buffer ran dry while moving), blocks appended later start the motion again by
+ * themselves: the machine stops exactly on the end of the last block, stays IDLE there while nothing comes, then
+ * runs the new blocks to the end of the program; every axis within its limits over the whole run. */
+static void test_resume_after_underrun(void **state)
+{
+    (void)state;
+    lsm_planner_config cfg;
+    config(&cfg);
+    lsm_pblock store[32];
+    lsm_planner pl;
+    lsm_real z[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 32, z), LSM_OK);
+    lsm_interp ip;
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    const double s = SPAN / 150.0;
+    const double pts[6][2] = {{20 * s, 0}, {30 * s, 8 * s}, {45 * s, 8 * s}, /* first batch */
+                              {50 * s, -5 * s}, {60 * s, -5 * s}, {70 * s, 10 * s}};
+    lsm_planner_move mv = {(lsm_real)(60 * s + 10), (lsm_real)0.02, 0, 0};
+    long n = 0, idle_at = -1, idle_cycles = 0;
+    static double q[3 * 40000];
+    lsm_interp_state st = LSM_INTERP_IDLE;
+    for (int batch = 0; batch < 2; batch++) {
+        for (int k = 0; k < 3; k++) {
+            const lsm_real e[LSM_MAX_AXES] = {(lsm_real)pts[3 * batch + k][0], (lsm_real)pts[3 * batch + k][1], 0, 0, 0, 0};
+            assert_int_equal(lsm_planner_append_line(&pl, e, &mv), LSM_OK);
+        }
+        if (batch == 0)
+            assert_int_equal(lsm_planner_flush(&pl), LSM_OK); /* a paused stream: nothing held back */
+        else
+            assert_int_equal(lsm_planner_finish(&pl), LSM_OK);
+        bool left_idle = false;
+        for (long k = 0; k < 20000 && n < 40000; k++) {
+            lsm_real pos[LSM_MAX_AXES];
+            st = lsm_interp_step(&ip, pos);
+            for (int i = 0; i < 3; i++)
+                q[3 * n + i] = (double)pos[i];
+            n++;
+            if (st != LSM_INTERP_IDLE)
+                left_idle = true;
+            if (batch == 0 && left_idle && st == LSM_INTERP_IDLE) {
+                if (idle_at < 0)
+                    idle_at = n - 1;
+                if (++idle_cycles == 300) /* a while at rest with an empty buffer */
+                    break;
+            }
+            if (st == LSM_INTERP_DONE)
+                break;
+        }
+        if (batch == 0) {
+            assert_true(idle_at > 0);
+            assert_int_equal(idle_cycles, 300);
+            /* the underrun stop is exactly the end of the last block, and the machine stays there */
+            assert_true(q[3 * idle_at] == (double)(lsm_real)pts[2][0] && q[3 * idle_at + 1] == (double)(lsm_real)pts[2][1]);
+            assert_true(q[3 * (n - 1)] == q[3 * idle_at] && q[3 * (n - 1) + 1] == q[3 * idle_at + 1]);
+        }
+    }
+    assert_int_equal(st, LSM_INTERP_DONE); /* resumed by itself and finished */
+    assert_true(q[3 * (n - 1)] == (double)(lsm_real)pts[5][0] && q[3 * (n - 1) + 1] == (double)(lsm_real)pts[5][1]);
+    assert_int_equal(pl.stats.plan_fallbacks, 0);
+    const double dt = CYCLE;
+    for (int a = 0; a < 3; a++) {
+        double vm = 0, am = 0, jm = 0;
+        for (long k = 3; k < n; k++) {
+            const double *x = &q[a];
+            vm = fmax(vm, fabs(x[3 * k] - x[3 * (k - 1)]) / dt);
+            am = fmax(am, fabs(x[3 * k] - 2 * x[3 * (k - 1)] + x[3 * (k - 2)]) / (dt * dt));
+            jm = fmax(jm, fabs(x[3 * k] - 3 * x[3 * (k - 1)] + 3 * x[3 * (k - 2)] - x[3 * (k - 3)]) / (dt * dt * dt));
+        }
+        if (vm > (double)cfg.axis[a].v_max * (1 + 1e-6) + noise(1) || am > (double)cfg.axis[a].a_max * (1 + 1e-6) + noise(2) ||
+            jm > (double)cfg.axis[a].j_max * (1 + 1e-6) + noise(3))
+            fail_msg("resume after underrun: axis %d v %g a %g j %g", a, vm, am, jm);
+    }
+    print_message("resume after underrun: stopped at cycle %ld, %ld cycles in all\n", idle_at, n);
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* bad input                                                                                                   */
+
+static void test_bad_blocks(void **state)
+{
+    (void)state;
+    lsm_planner_config cfg;
+    config(&cfg);
+    lsm_pblock store[16];
+    lsm_planner pl;
+    lsm_real z[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(NULL, &cfg, store, 16, z), LSM_E_NULL);
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 4, z), LSM_E_PL_CAPACITY);
+    lsm_planner_config bad = cfg;
+    bad.cycle_s = 0;
+    assert_int_equal(lsm_planner_init(&pl, &bad, store, 16, z), LSM_E_CYCLE);
+    bad = cfg;
+    bad.axis[1].j_max = -1;
+    assert_int_equal(lsm_planner_init(&pl, &bad, store, 16, z), LSM_E_LIMIT);
+    bad = cfg;
+    bad.axis[0].a_max = (lsm_real)NAN;
+    assert_int_equal(lsm_planner_init(&pl, &bad, store, 16, z), LSM_E_NAN);
+    bad = cfg;
+    bad.cap_margin = 1;
+    assert_int_equal(lsm_planner_init(&pl, &bad, store, 16, z), LSM_E_ARG);
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 16, z), LSM_OK);
+
+    lsm_planner_move mv = {50, 0.01f, 7, 0};
+    lsm_real p1[LSM_MAX_AXES] = {10, 0, 0, 0, 0, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, p1, &mv), LSM_OK);
+    const uint32_t count0 = lsm_planner_count(&pl) + pl.fit_n;
+    lsm_real nanp[LSM_MAX_AXES] = {(lsm_real)NAN, 0, 0, 0, 0, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, nanp, &mv), LSM_E_NAN);
+    lsm_real infp[LSM_MAX_AXES] = {0, (lsm_real)INFINITY, 0, 0, 0, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, infp, &mv), LSM_E_INF);
+    assert_int_equal(lsm_planner_append_line(&pl, p1, &mv), LSM_E_ZERO_LENGTH); /* zero length */
+    lsm_real p2[LSM_MAX_AXES] = {10, 5, 0, 0, 0, 0};
+    lsm_planner_move neg = {-1, 0.01f, 8, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, p2, &neg), LSM_E_NEG_FEED);
+    lsm_planner_move nanf = {(lsm_real)NAN, 0.01f, 8, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, p2, &nanf), LSM_E_NAN);
+    lsm_planner_move badtol = {50, -0.1f, 8, 0};
+    assert_int_equal(lsm_planner_append_line(&pl, p2, &badtol), LSM_E_TOLERANCE);
+    lsm_real pa[LSM_MAX_AXES] = {10, 5, 0, 1, 0, 0}; /* A is not in the mask */
+    assert_int_equal(lsm_planner_append_line(&pl, pa, &mv), LSM_E_PL_AXIS);
+    const lsm_real c3[3] = {10, 0, 0}, e3[3] = {10, 0, 0};
+    assert_int_equal(lsm_planner_append_arc(&pl, e3, c3, LSM_GEOM_PLANE_XY, 1, 0, &mv), LSM_E_ARC_GEOMETRY);
+    assert_int_equal(lsm_planner_append_line(&pl, p1, NULL), LSM_E_NULL);
+    /* nothing was lost or changed */
+    assert_int_equal(lsm_planner_count(&pl) + pl.fit_n, count0);
+    /* fill the buffer: FULL, and then everything accepted is still there */
+    lsm_planner_move ex = {50, 0, 0, 0}; /* exact stops: every block is a block of its own */
+    uint32_t accepted = 1;
+    lsm_status s = LSM_OK;
+    for (int k = 0; k < 40 && s == LSM_OK; k++) {
+        lsm_real q[LSM_MAX_AXES] = {(lsm_real)(10 + (k + 1) * 2), (lsm_real)((k % 2) * 3), 0, 0, 0, 0};
+        ex.seq = (uint32_t)(100 + k);
+        s = lsm_planner_append_line(&pl, q, &ex);
+        if (s == LSM_OK)
+            accepted++;
+    }
+    assert_int_equal(s, LSM_E_FULL);
+    assert_true(lsm_planner_count(&pl) >= accepted);
+    const lsm_pblock *last = lsm_planner_block(&pl, pl.tail - 1u);
+    assert_non_null(last);
+    assert_int_equal(last->seq, 100 + accepted - 2);
+    assert_int_equal(lsm_planner_finish(&pl), LSM_OK);
+    assert_int_equal(lsm_planner_append_line(&pl, p2, &mv), LSM_E_PL_FINISHED);
+    /* the machine runs all of it, to the last accepted point */
+    lsm_interp ip;
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    lsm_real pos[LSM_MAX_AXES];
+    lsm_interp_state st = LSM_INTERP_IDLE;
+    for (long k = 0; k < 200000 && st != LSM_INTERP_DONE; k++)
+        st = lsm_interp_step(&ip, pos);
+    assert_int_equal(st, LSM_INTERP_DONE);
+    assert_true(pos[0] == (lsm_real)(10 + (accepted - 1) * 2));
+    /* override range */
+    assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)2.5), LSM_E_PL_OVERRIDE);
+    assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)NAN), LSM_E_NAN);
+}
+
+/* The size of a look-ahead block (the goal is 96 bytes in the float build). */
+static void test_block_size(void **state)
+{
+    (void)state;
+    print_message("sizeof(lsm_pblock) = %zu bytes, sizeof(lsm_planner) = %zu, sizeof(lsm_interp) = %zu\n",
+                  sizeof(lsm_pblock), sizeof(lsm_planner), sizeof(lsm_interp));
+    if (LSM_REAL_IS_FLOAT)
+        assert_true(sizeof(lsm_pblock) <= 96);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1)
+        g_seed = strtoul(argv[1], NULL, 10);
+    if (argc > 2)
+        g_count = strtol(argv[2], NULL, 10);
+    print_message("seed %lu, count %ld\n", g_seed, g_count);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_block_size), cmocka_unit_test(test_bad_blocks), cmocka_unit_test(test_lines),
+        cmocka_unit_test(test_arcs),       cmocka_unit_test(test_mixed),      cmocka_unit_test(test_dense),
+        cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),  cmocka_unit_test(test_underrun),
+        cmocka_unit_test(test_resume_after_underrun),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

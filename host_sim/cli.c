@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -185,4 +186,29 @@ FILE *cli_open_out(const char *dir, const char *name, char *path, size_t n)
     if (!f)
         fprintf(stderr, "error: cannot write %s\n", path);
     return f;
+}
+
+int cli_plot(const char *args)
+{
+    char repo[3000];
+    const ssize_t n = readlink("/proc/self/exe", repo, sizeof repo - 1);
+    if (n <= 0)
+        return -1;
+    repo[n] = '\0';
+    for (int up = 0; up < 3; up++) { /* <repo>/build/bin/lissom-sim -> <repo> */
+        char *slash = strrchr(repo, '/');
+        if (!slash)
+            return -1;
+        *slash = '\0';
+    }
+    char py[3100];
+    const char *env = getenv("LISSOM_PYTHON");
+    if (env && *env)
+        snprintf(py, sizeof py, "%s", env);
+    else
+        snprintf(py, sizeof py, "%s/.venv/bin/python", repo);
+    char cmd[16384];
+    if (snprintf(cmd, sizeof cmd, "PYTHONPATH='%s/hil' '%s' -m lissom_hil.plot %s", repo, py, args) >= (int)sizeof cmd)
+        return -1;
+    return system(cmd);
 }

@@ -17,30 +17,12 @@
 #include "move.h"
 #include "stepgen.h"
 
-/* Runs `python -m lissom_hil.plot KIND CSV --out PNG` with the project's venv python (or $LISSOM_PYTHON). */
+/* `python -m lissom_hil.plot KIND CSV --out PNG` */
 int sim_plot(const char *kind, const char *csv, const char *png)
 {
-    /* <repo>/build/bin/lissom-sim -> <repo>: the venv is <repo>/.venv, the package <repo>/hil/lissom_hil */
-    char repo[3000];
-    ssize_t n = readlink("/proc/self/exe", repo, sizeof repo - 1);
-    if (n <= 0)
-        return -1;
-    repo[n] = '\0';
-    for (int up = 0; up < 3; up++) {
-        char *slash = strrchr(repo, '/');
-        if (!slash)
-            return -1;
-        *slash = '\0';
-    }
-    char py[3100];
-    const char *env = getenv("LISSOM_PYTHON");
-    if (env && *env)
-        snprintf(py, sizeof py, "%s", env);
-    else
-        snprintf(py, sizeof py, "%s/.venv/bin/python", repo);
-    char cmd[9400];
-    snprintf(cmd, sizeof cmd, "PYTHONPATH='%s/hil' '%s' -m lissom_hil.plot %s '%s' --out '%s'", repo, py, kind, csv, png);
-    return system(cmd);
+    char args[9400];
+    snprintf(args, sizeof args, "%s '%s' --out '%s'", kind, csv, png);
+    return cli_plot(args);
 }
 
 int cmd_demo(int argc, char **argv)

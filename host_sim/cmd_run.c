@@ -128,12 +128,12 @@ static int write_csvs(const char *out, const sim_run_result *r)
         for (int i = 0; i < r->n_axes; i++) {
             const int a = r->axis_index[i];
             const double q0 = r->q[k * LSM_MAX_AXES + a];
-            const double q1 = k >= 1 ? r->q[(k - 1) * LSM_MAX_AXES + a] : r->q[a];
-            const double q2 = k >= 2 ? r->q[(k - 2) * LSM_MAX_AXES + a] : r->q[a];
-            const double q3 = k >= 3 ? r->q[(k - 3) * LSM_MAX_AXES + a] : r->q[a];
+            const double q1 = k >= 1 ? r->q[(k - 1) * LSM_MAX_AXES + a] : r->start[a];
+            const double q2 = k >= 2 ? r->q[(k - 2) * LSM_MAX_AXES + a] : r->start[a];
+            const double q3 = k >= 3 ? r->q[(k - 3) * LSM_MAX_AXES + a] : r->start[a];
             fprintf(f, ",%.12g", q0);
             if (r->act)
-                fprintf(f, ",%.12g,%.6g", r->act[k * LSM_MAX_AXES + a], q0 - r->act[k * LSM_MAX_AXES + a]);
+                fprintf(f, ",%.12g,%.9g", r->act[k * LSM_MAX_AXES + a], q0 - r->act[k * LSM_MAX_AXES + a]);
             fprintf(f, ",%.9g,%.9g,%.9g", (q0 - q1) / dt, (q0 - 2 * q1 + q2) / (dt * dt),
                     (q0 - 3 * q1 + 3 * q2 - q3) / (dt * dt * dt));
         }
@@ -146,28 +146,9 @@ static int write_csvs(const char *out, const sim_run_result *r)
 /* python -m lissom_hil.plot run DIR/run.csv --out DIR --machine M (the project's venv, or $LISSOM_PYTHON) */
 static int plot_run(const char *out, const char *machine)
 {
-    char repo[3000];
-    ssize_t n = readlink("/proc/self/exe", repo, sizeof repo - 1);
-    if (n <= 0)
-        return -1;
-    repo[n] = '\0';
-    for (int up = 0; up < 3; up++) {
-        char *slash = strrchr(repo, '/');
-        if (!slash)
-            return -1;
-        *slash = '\0';
-    }
-    char py[3100];
-    const char *env = getenv("LISSOM_PYTHON");
-    if (env && *env)
-        snprintf(py, sizeof py, "%s", env);
-    else
-        snprintf(py, sizeof py, "%s/.venv/bin/python", repo);
-    char cmd[16000];
-    snprintf(cmd, sizeof cmd,
-             "PYTHONPATH='%s/hil' '%s' -m lissom_hil.plot run '%s/run.csv' --out '%s' --machine '%s' >/dev/null", repo,
-             py, out, out, machine);
-    return system(cmd);
+    char args[12000];
+    snprintf(args, sizeof args, "run '%s/run.csv' --out '%s' --machine '%s' >/dev/null", out, out, machine);
+    return cli_plot(args);
 }
 
 int cmd_run(int argc, char **argv)

@@ -27,6 +27,7 @@ static const subcommand k_commands[] = {
     {"smooth", cmd_smooth, "G2 corner smoothing of a G-code file with clothoid pairs within a tolerance"},
     {"bench-clothoid", cmd_bench_clothoid, "host benchmark: ns per corner smoothed and per clothoid step"},
     {"run", cmd_run, "run a G-code program through the look-ahead planner on a machine (setpoints, limits)"},
+    {"bench-planner", cmd_bench_planner, "host benchmark: lissom planner vs the VPOp offline reference (durations, limits, ns)"},
     /* further subcommands register here, one line each */
 };
 

@@ -65,6 +65,7 @@ typedef struct sim_run_result {
     double end_error;
     double max_follow_err[LSM_MAX_AXES];
     double prog_end[LSM_MAX_AXES];
+    double start[LSM_MAX_AXES];  /* where the machine rests before the first setpoint */
     size_t prog_blocks;        /* motion blocks in the program */
     double prog_length_mm;     /* length of the programmed path (X Y Z) */
     double plan_ns_per_block;  /* host time spent in append (corner smoothing + backward pass) per block */

@@ -5,17 +5,22 @@
 #   3. fails if an image links a heap allocator (malloc, free, _sbrk, ...) or newlib's stdio (printf family);
 #   4. fails if an image links software double-precision routines (__aeabi_d*, __aeabi_f2d, ...); lists, as
 #      warnings, every such routine and every double libm call the float core archive refers to;
-#   5. runs lissom-selftest.elf and lissom-bench.elf under qemu-system-arm -M mps2-an386 -icount shift=0
-#      with a timeout and requires exit code 0 and their PASS line; runs lissom-faulttest.elf and requires
-#      the HardFault report and exit code 99.
+#   5. runs lissom-selftest.elf, lissom-contour.elf and lissom-bench.elf under qemu-system-arm -M mps2-an386
+#      -icount shift=0 with a timeout and requires exit code 0 and their PASS line; runs lissom-faulttest.elf and
+#      requires the HardFault report and exit code 99;
+#   6. builds the host twin of the contour program (lissom-contour-host, target of the host build) and requires
+#      its report (checksum of every setpoint, end point, planner statistics, sampled setpoints) to equal the
+#      image's line for line.
 # Ends with "arm_check: PASS" or "arm_check: FAIL (...)"; exit status 0 or 1.
-# Environment: LSM_ARM_BUILD_DIR (default <repo>/build-arm), LSM_QEMU_TIMEOUT (s, default 60).
+# Environment: LSM_ARM_BUILD_DIR (default <repo>/build-arm), LSM_BUILD_DIR (host build, default <repo>/build;
+# it must be configured, e.g. by scripts/build.sh), LSM_QEMU_TIMEOUT (s, default 60).
 set -uo pipefail
 
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD=${LSM_ARM_BUILD_DIR:-$ROOT/build-arm}
+HOST_BUILD=${LSM_BUILD_DIR:-$ROOT/build}
 QEMU_TIMEOUT=${LSM_QEMU_TIMEOUT:-60}
-IMAGES=(lissom-selftest lissom-bench lissom-faulttest)
+IMAGES=(lissom-selftest lissom-contour lissom-bench lissom-faulttest)
 FAILS=()
 fail() { echo "FAIL: $*"; FAILS+=("$1"); }
 finish() {
@@ -46,6 +51,14 @@ fi
 echo "ok: built ($(grep -c '^\[' "$BUILD/arm_check.build.log") steps; log: $BUILD/arm_check.build.log)"
 CORE=$BUILD/firmware/liblsm_core_f.a
 [ -f "$CORE" ] || { fail "no-core-archive"; finish; }
+# the contour program's host twin, built now from the same sources as the images (compared at the end)
+if [ ! -f "$HOST_BUILD/CMakeCache.txt" ]; then
+    host_built=no-host-build; echo "FAIL: $HOST_BUILD is not configured (scripts/build.sh, or set LSM_BUILD_DIR)"
+elif ! cmake --build "$HOST_BUILD" --target lissom-contour-host >"$BUILD/arm_check.host.log" 2>&1; then
+    host_built=host-contour-build; tail -20 "$BUILD/arm_check.host.log"
+else
+    host_built=ok; echo "ok: host twin lissom-contour-host built in $HOST_BUILD"
+fi
 
 echo "== sizes"
 ELFS=()
@@ -100,7 +113,7 @@ run_image() {  # image, the line it must print (regex), expected exit status
     timeout "$QEMU_TIMEOUT" qemu-system-arm -M mps2-an386 -cpu cortex-m4 -nographic -monitor none -serial none \
         -semihosting-config enable=on,target=native -icount shift=0 -kernel "$elf" >"$log" 2>&1
     rc=$?
-    grep -v '^sample \|^check ok' "$log" | sed "s/^/  [$img] /"
+    grep -v '^sample \|^contour_sample \|^check ok' "$log" | sed "s/^/  [$img] /"
     echo "  [$img] exit status $rc after $((SECONDS - t0)) s (full output: $log)"
     if [ $rc -eq 124 ]; then fail "$img-timeout"
     elif [ $rc -ne "$want_rc" ]; then fail "$img-exit-$rc"
@@ -108,7 +121,32 @@ run_image() {  # image, the line it must print (regex), expected exit status
     fi
 }
 run_image lissom-selftest "selftest PASS"
+run_image lissom-contour "contour PASS"
 run_image lissom-bench "bench PASS"
 run_image lissom-faulttest "HardFault: pc=0x[0-9a-f]{8} .* bfar=0xf0000000" 99
+
+echo "== contour program: image vs host float build (same source, same float core)"
+HOST=$HOST_BUILD/bin/lissom-contour-host
+CLOG=$BUILD/lissom-contour.qemu.log
+if [ "$host_built" != ok ]; then
+    fail "$host_built"
+elif [ ! -f "$CLOG" ]; then
+    fail "contour-no-image-output"
+else
+    "$HOST" >"$BUILD/lissom-contour-host.log" 2>&1
+    hrc=$?
+    report() { grep -E '^(contour result=|contour_stats |contour_sample )' "$1"; }
+    echo "  image: $(grep -E '^contour result=' "$CLOG")"
+    echo "  host:  $(grep -E '^contour result=' "$BUILD/lissom-contour-host.log")"
+    if [ $hrc -ne 0 ]; then
+        fail "contour-host-exit-$hrc"
+    elif [ -z "$(report "$CLOG")" ] || [ -z "$(report "$BUILD/lissom-contour-host.log")" ]; then
+        fail "contour-no-report"
+    elif ! diff <(report "$CLOG") <(report "$BUILD/lissom-contour-host.log") >"$BUILD/contour.diff"; then
+        fail "contour-mismatch"; echo "  the image and the host differ (< image, > host):"; head -20 "$BUILD/contour.diff" | sed 's/^/    /'
+    else
+        echo "ok: contour report identical on the image and the host ($(report "$CLOG" | wc -l) lines: checksum, end point, stats, samples)"
+    fi
+fi
 
 finish

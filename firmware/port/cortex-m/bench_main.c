@@ -14,7 +14,7 @@
  *      largest single cycle (read per call, so +-40 instructions).
  * Output, one line per benchmark (scripts/arm_bench.sh turns it into a table):
  *   bench <name> <instructions, 2 decimals> <unit> calls=<N> [max=<M> max_at=<where>]
- *   bench <name> NA <unit> status=pending   (a slot for a module that is not in the core yet)
+ * The planner and interpolator benchmarks are in bench_planner.c.
  *   size <type> <bytes>
  * Exit code 0, or 1 if the calibration fails (99: HardFault).
  * Figures are instructions, not cycles: a real M4 adds flash wait states, 14-cycle VDIV/VSQRT, and so on.
@@ -22,6 +22,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "bench_planner.h"
 #include "cm_board.h"
 #include "cm_out.h"
 #include "move.h"
@@ -98,15 +99,6 @@ static void out_bench(const char *name, uint32_t x100, const char *unit, uint32_
         g_max_note = NULL;
     }
     cm_out_char('\n');
-}
-
-static void out_slot(const char *name, const char *unit)
-{
-    cm_out_str("bench ");
-    cm_out_str(name);
-    cm_out_str(" NA ");
-    cm_out_str(unit);
-    cm_out_str(" status=pending\n");
 }
 
 static void out_size(const char *type, uint32_t bytes)
@@ -354,19 +346,16 @@ int main(void)
     bench_stepgen("stepgen_cycle_3ax", 3);
     bench_stepgen("stepgen_cycle_6ax", 6);
 
-    /* look-ahead planner and interpolator: slots until firmware/ has the planner */
-    out_slot("planner_cycle_line_1ax", "cycle");
-    out_slot("planner_cycle_line_3ax", "cycle");
-    out_slot("planner_cycle_line_6ax", "cycle");
-    out_slot("planner_cycle_arc_3ax", "cycle");
-    out_slot("planner_cycle_arc_6ax", "cycle");
-    out_slot("planner_cycle_clothoid_3ax", "cycle");
-    out_slot("planner_cycle_clothoid_6ax", "cycle");
-    out_slot("planner_append_block", "block");
+    /* look-ahead planner and interpolator (bench_planner.c) */
+    const bool planner_ok = bench_planner();
 
     out_size("lsm_scurve", (uint32_t)sizeof(lsm_scurve));
     out_size("lsm_move", (uint32_t)sizeof(lsm_move));
     out_size("lsm_stepgen", (uint32_t)sizeof(lsm_stepgen));
+    if (!planner_ok) {
+        cm_out_str("bench FAIL: a planner benchmark did not run to its end\n");
+        return 1;
+    }
     if (g_last_status != LSM_OK) {
         cm_out_str("bench FAIL: a move plan failed\n");
         return 1;

@@ -13,6 +13,7 @@ int cmd_smooth(int argc, char **argv);
 int cmd_bench_clothoid(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_bench_planner(int argc, char **argv);
+int cmd_plot(int argc, char **argv);
 /* further subcommands declare here, one line each */
 
 #endif

@@ -28,6 +28,7 @@ static const subcommand k_commands[] = {
     {"bench-clothoid", cmd_bench_clothoid, "host benchmark: ns per corner smoothed and per clothoid step"},
     {"run", cmd_run, "run a G-code program through the look-ahead planner on a machine (setpoints, limits)"},
     {"bench-planner", cmd_bench_planner, "host benchmark: lissom planner vs the VPOp offline reference (durations, limits, ns)"},
+    {"plot", cmd_plot, "draw the PNG plots of a run directory (feed, acceleration, jerk, error, XY path by feed)"},
     /* further subcommands register here, one line each */
 };
 

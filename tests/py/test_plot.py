@@ -140,3 +140,28 @@ def test_cli(tmp_path):
     r = subprocess.run([sys.executable, "-m", "lissom_hil.plot", "scurve", str(csv_path)], capture_output=True,
                        text=True, env=env, timeout=120)
     assert r.returncode == 1 and "t,j,a,v,s" in r.stderr
+
+
+def test_sim_plot_subcommand(sim, tmp_path):
+    """`lissom-sim run` then `lissom-sim plot RUN_DIR`: the five PNGs from the run's own CSV, and clean errors."""
+    root = os.path.dirname(HIL)
+    prog = os.path.join(root, "host_sim", "examples", "shahzadeh_corner.ngc")
+    machine = os.path.join(root, "host_sim", "machines", "router.json")
+    run_dir = tmp_path / "run"
+    sim("run", prog, "--machine", machine, "--out", run_dir)
+    assert not list(run_dir.glob("*.png"))  # no --plots: the run itself drew nothing
+    sim("plot", run_dir, "--machine", machine, "--out", tmp_path / "png")
+    names = sorted(p.name for p in (tmp_path / "png").glob("*.png"))
+    assert names == ["run_accel.png", "run_error.png", "run_feed.png", "run_jerk.png", "run_path.png"]
+    for p in (tmp_path / "png").glob("*.png"):
+        check_png(str(p))
+    sim("plot", run_dir)  # default output: the run directory
+    assert len(list(run_dir.glob("*.png"))) == 5
+    r = sim("plot", tmp_path / "missing", ok=False)
+    assert r.returncode == 1 and "run.csv not found" in r.stderr
+    r = sim("plot", run_dir, "--machine", tmp_path / "none.json", ok=False)
+    assert r.returncode == 1 and "machine file" in r.stderr
+    r = sim("plot", ok=False)
+    assert r.returncode == 2 and "usage" in r.stderr
+    r = sim("plot", run_dir, "--bogus", "1", ok=False)
+    assert r.returncode == 2

@@ -121,12 +121,33 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
         ds[i] = start[i] - centre[i];
         de[i] = end[i] - centre[i];
     }
-    const lsm_real u1 = dot3(ds, e1), v1 = dot3(ds, e2), u2 = dot3(de, e1), v2 = dot3(de, e2);
-    const lsm_real r1 = lsm_sqrt(u1 * u1 + v1 * v1), r2 = lsm_sqrt(u2 * u2 + v2 * v2);
+    lsm_real u1 = dot3(ds, e1), v1 = dot3(ds, e2), u2 = dot3(de, e1), v2 = dot3(de, e2);
+    lsm_real r1 = lsm_sqrt(u1 * u1 + v1 * v1), r2 = lsm_sqrt(u2 * u2 + v2 * v2);
     if (!(r1 > LSM_R(0.0)) || !(r2 > LSM_R(0.0)) || lsm_check_finite(r1) || lsm_check_finite(r2))
         return LSM_E_ARC_GEOMETRY;
     if (lsm_fabs(r1 - r2) > (lsm_real)LSM_GEOM_ARC_TOL_MM)
         return LSM_E_ARC_GEOMETRY;
+    /* Rounded I J K (CAM output) leave the end a little off the start's circle. Move the centre onto the
+     * perpendicular bisector of the chord, to its point nearest the programmed centre: shift t along the chord
+     * direction d, t = (r2² - r1²) / (2 |chord|); then both points lie on the circle and the arc ends exactly on
+     * the programmed end. Only while that shift stays within the radius tolerance (a nearly closed arc with
+     * a short chord keeps the programmed centre, and its end is off by at most |r1 - r2|). */
+    lsm_real cshift[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+    {
+        const lsm_real du = u2 - u1, dv = v2 - v1;
+        const lsm_real chord = lsm_sqrt(du * du + dv * dv);
+        if (r1 != r2 && chord > LSM_R(16.0) * LSM_REAL_EPS * r1) {
+            const lsm_real t = (r2 - r1) * (r2 + r1) / (LSM_R(2.0) * chord);
+            if (lsm_fabs(t) <= (lsm_real)LSM_GEOM_ARC_TOL_MM) {
+                const lsm_real su = t * du / chord, sv = t * dv / chord;
+                u1 -= su, v1 -= sv, u2 -= su, v2 -= sv;
+                for (int i = 0; i < 3; i++)
+                    cshift[i] = su * e1[i] + sv * e2[i];
+                r1 = lsm_sqrt(u1 * u1 + v1 * v1);
+                r2 = lsm_sqrt(u2 * u2 + v2 * v2);
+            }
+        }
+    }
     const lsm_real phi0 = lsm_atan2(v1, u1);
     const lsm_real phi1 = lsm_atan2(v2, u2);
     lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
@@ -141,7 +162,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->reserved = 0;
     const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
-        g->u.arc.centre_mm[i] = centre[i] + ns * n[i];
+        g->u.arc.centre_mm[i] = centre[i] + cshift[i] + ns * n[i];
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }

@@ -93,7 +93,10 @@ lsm_status lsm_geom_line_init(lsm_geom *g, const lsm_real p0[LSM_MAX_AXES], cons
 /* Arc in G17/G18/G19 from start, end and centre (X Y Z, mm), direction dir = +1 (G3, counter-
  * clockwise) or -1 (G2), plus `turns` extra full turns; end == start (in the plane) is a full
  * circle. The centre's coordinate along the normal is ignored (the start's is used); the end's
- * normal coordinate gives the helix. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_INF, LSM_E_ARG (plane or
+ * normal coordinate gives the helix. When the end is a little off the start's circle (rounded I J K),
+ * the centre is moved onto the chord's perpendicular bisector (the point nearest the programmed centre)
+ * if that moves it by at most LSM_GEOM_ARC_TOL_MM, so the arc passes through both programmed points.
+ * Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_INF, LSM_E_ARG (plane or
  * dir), LSM_E_ARC_GEOMETRY (zero radius, |r_start - r_end| > LSM_GEOM_ARC_TOL_MM). */
 lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_real end[3], const lsm_real centre[3],
                              lsm_geom_plane plane, int dir, uint32_t turns);

@@ -1,0 +1,80 @@
+/* test_geom.c: lsm_geom arcs from rounded CAM centres (the end lands exactly on the programmed point). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <math.h>
+
+#include <cmocka.h>
+
+#include "geom.h"
+#include "lsm_test_rng.h"
+
+/* Distance from the arc's end (eval at len) to the programmed end, and the centre's shift. */
+static double end_miss(const lsm_geom *g, const lsm_real end[3])
+{
+    lsm_real p[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_geom_eval(g, g->len, p, NULL, NULL), LSM_OK);
+    double d2 = 0;
+    for (int i = 0; i < 3; i++)
+        d2 += ((double)p[i] - end[i]) * ((double)p[i] - end[i]);
+    return sqrt(d2);
+}
+
+static void test_rounded_centre_quarter(void **state)
+{
+    (void)state;
+    /* quarter circle R 10 about the origin, end radius 10.00002 (I J rounded) */
+    const lsm_real s[3] = {10, 0, 0}, e[3] = {0, LSM_R(10.00002), 0}, c[3] = {0, 0, 0};
+    lsm_geom g;
+    assert_int_equal(lsm_geom_arc_init(&g, s, e, c, LSM_GEOM_PLANE_XY, 1, 0), LSM_OK);
+    const double tol = LSM_REAL_IS_FLOAT ? 4e-5 : 1e-12;
+    assert_true(end_miss(&g, e) <= tol);
+    /* the start is still the start (phi0, radius) */
+    lsm_real p[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_geom_eval(&g, 0, p, NULL, NULL), LSM_OK);
+    assert_true(fabs((double)p[0] - 10) <= tol && fabs((double)p[1]) <= tol);
+    /* the centre moved along the chord by (r2² - r1²) / (2 chord) = about 1.414e-5 */
+    const double shift = hypot((double)g.u.arc.centre_mm[0], (double)g.u.arc.centre_mm[1]);
+    assert_true(shift > 1.2e-5 && shift < 1.6e-5);
+}
+
+static void test_rounded_centre_random(void **state)
+{
+    (void)state;
+    uint64_t rng = 0x9e3779b97f4a7c15ull;
+    const double tol_rel = LSM_REAL_IS_FLOAT ? 3e-6 : 1e-13;
+    for (int k = 0; k < 20000; k++) {
+        const double R = test_logu(&rng, 0.1, 200), a0 = 6.283 * test_urand(&rng);
+        const double sw = 0.05 + 6.0 * test_urand(&rng), dir = test_urand(&rng) < 0.5 ? 1 : -1;
+        const double cx = 400 * test_urand(&rng) - 200, cy = 400 * test_urand(&rng) - 200;
+        const double q = 1e-4; /* CAM rounding of every coordinate (4 decimals) */
+        lsm_real s[3] = {(lsm_real)(round((cx + R * cos(a0)) / q) * q), (lsm_real)(round((cy + R * sin(a0)) / q) * q), 0};
+        lsm_real e[3] = {(lsm_real)(round((cx + R * cos(a0 + dir * sw)) / q) * q),
+                         (lsm_real)(round((cy + R * sin(a0 + dir * sw)) / q) * q), 0};
+        lsm_real c[3] = {(lsm_real)(round(cx / q) * q), (lsm_real)(round(cy / q) * q), 0};
+        lsm_geom g;
+        const lsm_status st = lsm_geom_arc_init(&g, s, e, c, LSM_GEOM_PLANE_XY, (int)dir, 0);
+        if (st != LSM_OK) { /* only a radius too small to hold the rounding may be refused */
+            assert_int_equal(st, LSM_E_ARC_GEOMETRY);
+            continue;
+        }
+        const double chord = hypot((double)e[0] - s[0], (double)e[1] - s[1]);
+        const double dr = fabs(hypot((double)e[0] - c[0], (double)e[1] - c[1]) - hypot((double)s[0] - c[0], (double)s[1] - c[1]));
+        const double shift = dr * (2 * R) / (2 * (chord > 0 ? chord : 1e-300));
+        const double miss = end_miss(&g, e);
+        if (shift <= 0.9 * LSM_GEOM_ARC_TOL_MM) /* corrected: exact to rounding */
+            assert_true(miss <= tol_rel * (R + 300));
+        else /* kept: off by at most the radius mismatch */
+            assert_true(miss <= dr + tol_rel * (R + 300));
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_rounded_centre_quarter),
+        cmocka_unit_test(test_rounded_centre_random),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -7,6 +7,8 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
 
 /* Uniform in [0, 1). */
 static inline double test_urand(uint64_t *st)
@@ -21,6 +23,23 @@ static inline double test_urand(uint64_t *st)
 static inline double test_logu(uint64_t *st, double lo, double hi)
 {
     return lo * pow(hi / lo, test_urand(st));
+}
+
+/* The randomized tests' command line, `test_x [seed] [count]`: each argument optional, a whole decimal number
+ * (or 0x hex); anything else ends the test with status 2 and a message, so a mistyped soak never silently runs
+ * the default. Returns the argument, or dflt when it is absent. */
+static inline unsigned long long test_arg_u(int argc, char **argv, int k, unsigned long long dflt)
+{
+    if (argc <= k)
+        return dflt;
+    char *end = NULL;
+    const unsigned long long v = strtoull(argv[k], &end, 0);
+    if (end == argv[k] || *end != '\0' || argv[k][0] == '-') {
+        fprintf(stderr, "%s: argument %d must be a non-negative whole number, not \"%s\" (usage: [seed] [count])\n",
+                argv[0], k, argv[k]);
+        exit(2);
+    }
+    return v;
 }
 
 #endif

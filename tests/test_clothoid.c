@@ -21,6 +21,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "lsm_test_rng.h"
+
 #include "clothoid.h"
 
 #define IS_F LSM_REAL_IS_FLOAT
@@ -443,10 +445,8 @@ static void test_fit_bad_input(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fresnel_reference), cmocka_unit_test(test_fresnel_derivative),

@@ -12,6 +12,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "lsm_test_rng.h"
+
 #include "co_test_util.h"
 
 static test_node tn;
@@ -462,10 +464,8 @@ static void test_lossy_channel(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 0);
-    if (argc > 2)
-        g_count = strtoul(argv[2], NULL, 0);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (unsigned long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     printf("test_co_path: seed %lu, %lu lossy runs\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup(test_decode, setup),

@@ -29,6 +29,8 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+
+#include "lsm_test_rng.h"
 #include <string.h>
 
 #include "corner.h"
@@ -855,10 +857,8 @@ static void test_geom(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_geom),         cmocka_unit_test(test_line_line_closed_form),

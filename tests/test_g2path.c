@@ -26,6 +26,8 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+
+#include "lsm_test_rng.h"
 #include <string.h>
 
 #include "g2path.h"
@@ -328,10 +330,8 @@ static void test_bad_input(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_paper_reproduction), cmocka_unit_test(test_scaling), cmocka_unit_test(test_auto),

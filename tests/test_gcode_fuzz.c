@@ -287,10 +287,8 @@ static void test_fuzz(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoull(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (uint64_t)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_fuzz)};
     return cmocka_run_group_tests_name(LSM_REAL_IS_FLOAT ? "gcode_fuzz_float" : "gcode_fuzz", tests, NULL, NULL);
 }

@@ -278,10 +278,8 @@ static void test_moves(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_velocity_changes),

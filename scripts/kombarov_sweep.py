@@ -3,7 +3,7 @@
 
 usage: kombarov_sweep.py [--sim PATH] [--json OUT]
 
-Runs `lissom-sim experiment kombarov --sweep --json` for five drive configurations of the default linear axis
+Runs `lissom-sim experiment kombarov --sweep --json` for six drive configurations of the default linear axis
 (position loop on the load or on the motor, feed-forward on or off, Coulomb friction 30 N or 0), each over the
 resonance frequencies 10..150 Hz, damping ratios 0.01..0.1 and velocity-loop bandwidths 20 and 40 Hz (kv scaled
 with the bandwidth), with a 1 s settle window and a 1 um settling band. Prints:
@@ -20,11 +20,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 CONFIGS = [
-    ("A", "load, FF, Coulomb 30 N", []),
-    ("B", "load, no FF, Coulomb 30 N", ["--no-ff"]),
-    ("C", "motor, FF, Coulomb 30 N", ["--feedback", "motor"]),
-    ("D", "motor, FF, Coulomb 0", ["--feedback", "motor", "--coulomb", "0"]),
-    ("E", "motor, no FF, Coulomb 0", ["--feedback", "motor", "--no-ff", "--coulomb", "0"]),
+    ("A", "load, FF, 30 N", []),
+    ("B", "load, FF, 0 N", ["--coulomb", "0"]),
+    ("C", "load, no FF, 30 N", ["--no-ff"]),
+    ("D", "motor, FF, 30 N", ["--feedback", "motor"]),
+    ("E", "motor, FF, 0 N", ["--feedback", "motor", "--coulomb", "0"]),
+    ("F", "motor, no FF, 0 N", ["--feedback", "motor", "--no-ff", "--coulomb", "0"]),
 ]
 COMMON = ["--sweep", "--settle-window", "1", "--band", "0.001", "--vel-bw-hz", "20,40", "--json"]
 

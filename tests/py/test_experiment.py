@@ -213,3 +213,20 @@ def test_kombarov_sweep(sim):
 def test_kombarov_bad_options(sim, args):
     p = sim("experiment", "kombarov", *args, ok=False)
     assert p.returncode == 2 and p.stderr.startswith("error:")
+
+
+def test_kombarov_positioning_machine(sim):
+    """The shipped chosen case (host_sim/machines/kombarov_positioning.json, docs/host_sim.md): a lightly damped
+    45 Hz axis in position mode without feed-forward. Measured: positioning error at arrival 262 um against
+    131 um (2.00x), max error over the move 5481 um for both (1.00x). Checked: the file is the case the docs
+    describe, the residual ratio is >= 1.9 and the max-error ratio < 1.05; with feed-forward switched on the same
+    axis no longer gives 2x on the residual (measured 1.84: friction and spring deflection, 13 um and 7 um)."""
+    m = str(MACHINES / "kombarov_positioning.json")
+    out = sim("experiment", "kombarov", "--machine", m, "--settle-window", 1, "--json")
+    d = out["drive"]
+    assert d["resonance_hz"] == pytest.approx(45, abs=0.05) and d["damping"] == pytest.approx(0.02, abs=1e-4)
+    assert d["vff_gain"] == 0 and d["aff_gain"] == 0 and d["feedback"] == "load" and d["kv_1_s"] == 40
+    assert out["ratio_residual_max"] >= 1.9
+    assert out["ratio_max"] < 1.05 and out["ratio_rms"] < 1.05
+    ff = sim("experiment", "kombarov", "--machine", m, "--vff", 1, "--aff", 1, "--settle-window", 1, "--json")
+    assert ff["ratio_residual_max"] < 2

@@ -35,6 +35,14 @@ def run(sim, extra):
     return json.loads(p.stdout)["sweep"]
 
 
+def um(mm):
+    """3 significant digits, without an exponent"""
+    x = 1e3 * mm
+    if x >= 1000:
+        return str(int(float(f"{x:.3g}")))
+    return f"{x:.3g}"
+
+
 def fmt(x, nd=2):
     return "-" if x is None else f"{x:.{nd}f}"
 
@@ -60,7 +68,7 @@ def main():
                        abs(r["drive"]["damping"] - 0.02) < 1e-9 and abs(r["drive"]["vel_bw_hz"] - 40) < 0.5)
             t, s = row["profiles"]["trapezoid"], row["profiles"]["sin2"]
             cells.append(f"{fmt(row['ratio_max'])} / {fmt(row['ratio_rms'])} / **{fmt(row['ratio_residual_max'])}**"
-                         f" ({1e3 * t['residual_max_error']:.3g} / {1e3 * s['residual_max_error']:.3g})"
+                         f" ({um(t['residual_max_error'])} / {um(s['residual_max_error'])})"
                          + ("" if row["step_test_settled"] else " *"))
         print(f"| {f:.0f} | " + " | ".join(cells) + " |")
 

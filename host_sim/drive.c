@@ -206,12 +206,13 @@ static double clamp_current(const sim_drive *d, double i, bool *limited)
     return i;
 }
 
-static double measured_load(const sim_drive *d)
+static double measured_pos(const sim_drive *d)
 {
+    const double x = d->p.motor_feedback ? d->x_m : d->x_l;
     const double cpu = d->p.encoder_counts_per_mm; /* counts per API unit */
     if (cpu <= 0)
-        return d->x_l;
-    const double units = d->x_l / d->unit_m;
+        return x;
+    const double units = x / d->unit_m;
     return floor(units * cpu + 0.5) / cpu * d->unit_m;
 }
 
@@ -238,7 +239,7 @@ lsm_status sim_drive_step_ff(sim_drive *d, double setpoint, double vel_ff, doubl
     d->limited = false;
     for (uint32_t k = 1; k <= d->n_sub; k++) {
         const double x_set = start + (set_end - start) * ((double)k / (double)d->n_sub);
-        const double v_cmd = p->kv_1_s * (x_set - measured_load(d)) + vff;
+        const double v_cmd = p->kv_1_s * (x_set - measured_pos(d)) + vff;
         const double e = v_cmd - d->v_m;
         double integ = d->integ_m_s;
         if (p->vel_ti_s > 0)
@@ -277,7 +278,7 @@ lsm_status sim_drive_step_current(sim_drive *d, double i_cmd_A, double *actual)
         integrate(d, i_cmd, d->dt_s);
     /* in current mode the position loop follows the load, so that switching back is bumpless */
     d->set_prev_m = d->set_m;
-    d->set_m = d->x_l;
+    d->set_m = d->p.motor_feedback ? d->x_m : d->x_l;
     d->integ_m_s = 0;
     d->cycles++;
     *actual = d->x_l / d->unit_m;

@@ -15,6 +15,9 @@
  *   correct what the rigid-body model misses: friction and the excitation of the resonance.
  *   The velocity integrator stops integrating while the current command is clamped (anti-windup).
  *
+ *   With motor_feedback the position loop is closed on x_motor instead (semi-closed loop): the load is
+ *   then outside the loop, and its vibration against the motor is only damped by the coupling.
+ *
  * Plant (two-mass model: motor and load coupled by a spring and a damper; the load is measured):
  *
  *   m_m x_m'' = kf i - k (x_m - x_l) - c (x_m' - x_l')
@@ -65,7 +68,10 @@ typedef struct sim_drive_params {
     double coulomb_N;             /* Coulomb friction on the load [N] */
     /* simulation */
     double servo_period_s;        /* loop rate and integration substep [s] */
-    double encoder_counts_per_mm; /* load encoder resolution [counts/mm or counts/rad]; 0 = ideal */
+    double encoder_counts_per_mm; /* position encoder resolution [counts/mm or counts/rad]; 0 = ideal */
+    bool motor_feedback;          /* close the position loop on the motor (semi-closed loop: rotary encoder,
+                                     no linear scale) instead of the load; default false. Not a machine-file
+                                     key. The following error reported is always setpoint - load. */
 } sim_drive_params;
 
 typedef struct sim_drive {

@@ -216,6 +216,45 @@ static void test_ramp_following_error(void **state)
     }
 }
 
+/* Where the position loop is closed: on a ramp at 100 mm/s with velocity feed-forward and only viscous friction
+ * on the load, the spring carries b v, so the load trails the motor by b v / k. The loop removes the error of the
+ * position it measures: with load feedback set - load -> 0 (and set - motor -> -b v / k), with motor feedback
+ * (semi-closed loop) set - motor -> 0 and set - load -> b v / k. Both on top of the lead of one servo substep,
+ * -v dt_s, that the loop has on a ramp (the setpoint of the substep is compared before the substep is integrated). */
+static void test_motor_feedback(void **state)
+{
+    (void)state;
+    const double v = 100.0, cycle = 1e-3;
+    for (int mf = 0; mf < 2; mf++) {
+        sim_drive_params p;
+        sim_drive_params_default(&p, false);
+        p.coulomb_N = 0;
+        p.vff_gain = 1.0;
+        p.motor_feedback = mf;
+        sim_drive d;
+        assert_int_equal(sim_drive_init(&d, &p, cycle, 0.0), LSM_OK);
+        double act = 0, set = 0;
+        for (int k = 1; k <= 3000; k++) {
+            set = v * k * cycle;
+            assert_int_equal(sim_drive_step(&d, set, v, &act), LSM_OK);
+        }
+        sim_drive_state st;
+        sim_drive_get_state(&d, &st);
+        const double defl = p.viscous_N_s_m * v / p.stiffness_N_m; /* mm: N s/m * mm/s / (N/m) */
+        printf("ramp %.0f mm/s, %s feedback: set - load %.6f mm, set - motor %.6f mm (b v / k = %.6f mm)\n", v,
+               mf ? "motor" : "load", set - st.load_pos, set - st.motor_pos, defl);
+        const double lead = -v * d.dt_s;
+        const double load_err = set - st.load_pos - lead, motor_err = set - st.motor_pos - lead;
+        if (mf) {
+            assert_true(fabs(motor_err) < 0.02 * defl);
+            assert_true(fabs(load_err - defl) < 0.02 * defl);
+        } else {
+            assert_true(fabs(load_err) < 0.02 * defl);
+            assert_true(fabs(motor_err + defl) < 0.02 * defl);
+        }
+    }
+}
+
 /* Feed-forward: along a smooth move (velocity 100 sin^2(pi t / 0.3 s) mm/s) the largest following error
  * falls with velocity feed-forward and again with acceleration feed-forward added. */
 static void test_feed_forward(void **state)
@@ -442,6 +481,7 @@ int main(void)
         cmocka_unit_test(test_current_limit),
         cmocka_unit_test(test_ramp_following_error),
         cmocka_unit_test(test_feed_forward),
+        cmocka_unit_test(test_motor_feedback),
         cmocka_unit_test(test_step_test_api),
         cmocka_unit_test(test_resonance),
         cmocka_unit_test(test_deterministic),

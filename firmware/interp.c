@@ -184,7 +184,7 @@ static void start_piece(lsm_interp *ip, const lsm_piece *pc, lsm_real first)
     const lsm_real dt = ip->pl->cfg.cycle_s;
     ip->pc = *pc;
     ip->running = 1;
-    ip->gen = ip->pl->gen;
+    ip->serial++;
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
     ip->phase = 0;
@@ -221,18 +221,6 @@ static void start_piece(lsm_interp *ip, const lsm_piece *pc, lsm_real first)
     }
 }
 
-static lsm_status plan_from_here(lsm_interp *ip, lsm_real v0, lsm_piece_mode mode, lsm_piece *out)
-{
-    lsm_status st = lsm_planner_plan_piece(ip->pl, ip->blk, ip->off_mm, v0, mode, out);
-    if (st != LSM_OK && st != LSM_E_INTERNAL)
-        return st;
-    if (st != LSM_OK)
-        ip->plan_errors++;
-    if (!(out->T_s > R0))
-        return st == LSM_OK ? LSM_E_EMPTY : st;
-    return st;
-}
-
 /* Anything left to move after the cursor? */
 static bool path_ahead(const lsm_interp *ip)
 {
@@ -245,6 +233,219 @@ static bool path_ahead(const lsm_interp *ip)
     if (b == NULL)
         return false;
     return ip->blk + 1u != pl->tail || ip->off_mm < b->g.len;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* switch points: where a new piece may start (a = 0)                                                          */
+
+typedef struct swpt {
+    uint8_t kind;   /* lsm_interp_switch */
+    uint8_t phase;  /* SW_BOUNDARY */
+    uint8_t mode;   /* lsm_piece_mode */
+    uint64_t cycle; /* SW_SAMPLE */
+    uint32_t blk;   /* start (block, offset) and speed */
+    lsm_real off;
+    lsm_real v;
+} swpt;
+
+static bool is_cruise(uint8_t p)
+{
+    return p == 0u || p == 8u || p == LSM_PIECE_PHASES - 1u;
+}
+
+/* At a sample where a = 0 (in a cruise, or exactly at the start of a ramp)? */
+static bool at_a_zero(const lsm_interp *ip)
+{
+    const uint8_t p = ip->phase;
+    return is_cruise(p) || (ip->tau == R0 && (p == 1u || p == 9u));
+}
+
+/* Start from rest (or from a stop inside the program) wanted now? */
+static bool rest_go(const lsm_interp *ip)
+{
+    const lsm_interp_state s = (lsm_interp_state)ip->state;
+    if (s == LSM_INTERP_DONE)
+        return false;
+    if (s == LSM_INTERP_HELD && ip->hold_req)
+        return false;
+    if (s != LSM_INTERP_RUN && !path_ahead(ip))
+        return false;
+    return !(ip->v_mm_s == R0 && ip->hold_req);
+}
+
+/* The point of phase boundary b (1 .. LSM_PIECE_PHASES) of the current piece, seen from the last sample. */
+static void boundary_point(const lsm_interp *ip, uint8_t b, swpt *w)
+{
+    w->kind = LSM_INTERP_SW_BOUNDARY;
+    w->phase = b;
+    if (b >= LSM_PIECE_PHASES) {
+        w->blk = ip->pc.end_blk;
+        w->off = R0;
+        w->v = ip->pc.v1_mm_s;
+        return;
+    }
+    const lsm_real d = ip->pc.st[b].s_mm - (ip->pc.st[ip->phase].s_mm + ip->sloc);
+    ahead(ip, d > R0 ? d : R0, &w->blk, &w->off);
+    w->v = ip->pc.st[b].v_mm_s;
+}
+
+/* The first switch point of the current piece where a replacement can start, given the lead. */
+static void replace_point(const lsm_interp *ip, swpt *w)
+{
+    const uint8_t p = ip->phase;
+    const lsm_real dt = ip->pl->cfg.cycle_s;
+    const uint32_t L = ip->lead_cycles;
+    if (at_a_zero(ip)) {
+        /* the sample L cycles ahead, if the cruise lasts that long (L = 0: the last sample itself) */
+        const bool fits = L == 0u || (is_cruise(p) && ip->tau + (lsm_real)(L + 1u) * dt < ip->pc.ph[p].T_s);
+        if (fits) {
+            w->kind = LSM_INTERP_SW_SAMPLE;
+            w->cycle = ip->cycles + 1u + L;
+            ahead(ip, ip->pc.st[p].v_mm_s * (lsm_real)L * dt, &w->blk, &w->off);
+            w->v = ip->v_mm_s;
+            return;
+        }
+    }
+    /* else the next boundary where a = 0: the start or the end of the next ramp, or the piece's end */
+    uint8_t b = p < 1u ? 1u : p < 8u ? 8u : p < 9u ? 9u : p < 16u ? 16u : (uint8_t)LSM_PIECE_PHASES;
+    boundary_point(ip, b, w);
+}
+
+/* What the interpolator needs next, and where; false: nothing. */
+static bool next_switch(const lsm_interp *ip, swpt *w)
+{
+    const lsm_planner *pl = ip->pl;
+    memset(w, 0, sizeof *w);
+    w->mode = LSM_PIECE_NORMAL;
+    if (!ip->running) {
+        if (!rest_go(ip))
+            return false;
+        w->kind = LSM_INTERP_SW_REST;
+        w->blk = ip->blk;
+        w->off = ip->off_mm;
+        if (id_lt_pub(w->blk, pl->head)) {
+            w->blk = pl->head;
+            w->off = R0;
+        }
+        w->v = ip->v_mm_s;
+        return true;
+    }
+    if (ip->pc.hold)
+        return false; /* a hold runs to its end */
+    if (ip->hold_req || ip->gen != pl->gen) {
+        w->mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+        replace_point(ip, w);
+        if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && ip->pc.stop)
+            return false; /* the piece ends at rest anyway: the next one starts from there */
+        if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && w->mode == LSM_PIECE_REPLAN)
+            w->mode = LSM_PIECE_NORMAL; /* the successor itself (a piece is needed there) */
+        return true;
+    }
+    if (ip->pc.step && ip->phase < 8u) {
+        boundary_point(ip, 8u, w); /* a step of a staircase: re-plan at the end of its ramp */
+        w->mode = LSM_PIECE_REPLAN;
+        return true;
+    }
+    if (ip->pc.stop)
+        return false;
+    boundary_point(ip, LSM_PIECE_PHASES, w);
+    return true;
+}
+
+static bool same_switch(const lsm_interp *ip, const lsm_interp_prep *q, const swpt *w)
+{
+    if (q->kind != w->kind || q->gen != ip->pl->gen || q->mode != w->mode)
+        return false;
+    switch (w->kind) {
+    case LSM_INTERP_SW_SAMPLE: return q->serial == ip->serial && q->cycle == w->cycle;
+    case LSM_INTERP_SW_BOUNDARY: return q->serial == ip->serial && q->phase == w->phase;
+    case LSM_INTERP_SW_REST: return q->serial == ip->serial && q->blk == w->blk && q->off_mm == w->off;
+    default: return false;
+    }
+}
+
+/* Plans the piece for switch point w into the slot. */
+static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
+{
+    lsm_interp_prep *q = &ip->prep;
+    q->ready = 0;
+    q->failed = 0;
+    q->kind = w->kind;
+    q->mode = w->mode;
+    q->phase = w->phase;
+    q->cycle = w->cycle;
+    q->serial = ip->serial;
+    q->gen = ip->pl->gen;
+    q->blk = w->blk;
+    q->off_mm = w->off;
+    q->v_mm_s = w->v;
+    lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &q->pc);
+    if (st == LSM_E_INTERNAL) { /* a fallback piece (counted by the planner): it is still a verified stop */
+        ip->plan_errors++;
+        st = LSM_OK;
+    }
+    if (st == LSM_OK && q->pc.T_s > R0) {
+        q->ready = 1;
+        return LSM_OK;
+    }
+    if (st == LSM_OK && w->mode == LSM_PIECE_HOLD) { /* a hold at rest: nothing to run */
+        q->ready = 1;
+        return LSM_OK;
+    }
+    q->failed = 1;
+    return st == LSM_OK ? LSM_E_EMPTY : st;
+}
+
+/* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
+static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w)
+{
+    lsm_interp_prep *q = &ip->prep;
+    if (same_switch(ip, q, w)) {
+        if (q->ready)
+            return q;
+        if (q->failed)
+            return NULL;
+    }
+    ip->tick_plans++;
+    return plan_switch(ip, w) == LSM_OK ? q : NULL;
+}
+
+/* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
+static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool replace)
+{
+    const uint32_t g = q->gen;
+    ip->prep.ready = 0;
+    if (replace)
+        ip->replans++;
+    ip->gen = g;
+    if (!(q->pc.T_s > R0)) { /* a hold at rest */
+        ip->running = 0;
+        ip->v_mm_s = R0;
+        ip->state = LSM_INTERP_HELD;
+        return;
+    }
+    /* the cursor goes exactly onto the piece's start, unless rounding already carried it past (then that block may
+     * have been released: the piece starts where the cursor is, within rounding of its start) */
+    if (!(id_lt_pub(q->blk, ip->blk) || (q->blk == ip->blk && q->off_mm < ip->off_mm)))
+        place(ip, q->blk, q->off_mm);
+    start_piece(ip, &q->pc, first);
+}
+
+/* Stop the clock at boundary p (entered while advancing)? Only where a piece is prepared for it (or, without
+ * lsm_interp_prepare, where one is wanted: the end of a ramp when the plan changed, or of a staircase step). */
+static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
+{
+    if (!(p == 1u || p == 8u || p == 9u || p == 16u))
+        return false;
+    const lsm_interp_prep *q = &ip->prep;
+    if (q->ready && q->kind == LSM_INTERP_SW_BOUNDARY && q->serial == ip->serial && q->phase == p &&
+        q->gen == ip->pl->gen)
+        return true;
+    if (ip->bg)
+        return false;
+    if ((p == 8u || p == 16u) && !ip->pc.hold && ip->pc.st[p].s_mm > ip->pc.st[p - 7u].s_mm)
+        return ip->gen != ip->pl->gen || (p == 8u && ip->pc.step);
+    return false;
 }
 
 /* Travel of phase p at tau (phase-local); updates the rotation for sin² phases (entered: from the entry angle). */
@@ -289,18 +490,17 @@ static lsm_real phase_travel(lsm_interp *ip, uint8_t p, lsm_real tau, bool enter
 
 /*
  * Advances the piece clock by dt_adv; returns the distance travelled (ds >= 0 modulo rounding) and whether the
- * piece ended (then *left is the time beyond its end), or stopped at the end of a ramp because the plan changed
- * (*ramp_end; *left as well).
+ * piece ended (then *left is the time beyond its end), or stopped at a boundary where a new piece starts
+ * (*brk; *left as well).
  */
-static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_real *left, bool *ramp_end)
+static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_real *left, bool *brk)
 {
     lsm_real ds = R0;
     uint8_t p = ip->phase;
     lsm_real tau = ip->tau + dt_adv;
     bool entered = false;
-    const bool stop_at_ramp_end = ip->gen != ip->pl->gen && !ip->pc.hold;
     *ended = false;
-    *ramp_end = false;
+    *brk = false;
     while (p < LSM_PIECE_PHASES && tau >= ip->pc.ph[p].T_s) {
         ds += ip->pc.ph[p].len_mm - ip->sloc;
         tau -= ip->pc.ph[p].T_s;
@@ -314,13 +514,10 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
             ip->hz_v = ip->pc.st[e].v_mm_s;
             ahead(ip, ip->pc.st[e].s_mm - ip->pc.st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
         }
-        if ((p == 8u || p == 16u) && (stop_at_ramp_end || (p == 8u && ip->pc.step && !ip->pc.hold)) &&
-            ip->pc.st[p].s_mm > ip->pc.st[p - 7u].s_mm) {
-            /* the end of a ramp while the plan changed, or of a step of a staircase: stop the clock here (the
-             * caller re-plans) */
+        if (p < LSM_PIECE_PHASES && stop_at_boundary(ip, p)) {
             ip->phase = p;
             ip->tau = R0;
-            *ramp_end = true;
+            *brk = true;
             *left = tau;
             return ds;
         }
@@ -382,24 +579,26 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
 {
     lsm_real adv = first;
     for (int guard = 0; guard < 8 && ip->running; guard++) {
-        bool ended, ramp_end;
+        bool ended, brk;
         lsm_real left = R0;
-        const lsm_real ds = piece_advance(ip, adv, &ended, &left, &ramp_end);
-        if (ramp_end) {
-            /* re-plan exactly at the end of the ramp, from the point and speed the planner was told (before the
-             * cursor moves there: rounding may carry it just past a block end, which would release that block) */
-            lsm_piece np;
-            const uint32_t g = ip->pl->gen;
-            ip->v_mm_s = ip->hz_v;
-            if (lsm_planner_plan_piece(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, LSM_PIECE_REPLAN, &np) == LSM_OK &&
-                np.T_s > R0) {
-                place(ip, ip->hz_blk, ip->hz_off);
-                start_piece(ip, &np, left);
-                ip->replans++;
+        const lsm_real ds = piece_advance(ip, adv, &ended, &left, &brk);
+        if (brk) {
+            /* a new piece starts exactly at this boundary (a = 0), between two samples; the cursor is put on its
+             * start before it moves there (rounding may carry it just past a block end, which would release it) */
+            swpt w;
+            memset(&w, 0, sizeof w);
+            w.kind = LSM_INTERP_SW_BOUNDARY;
+            w.phase = ip->phase;
+            w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+            ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off); /* the boundary: ds beyond the last sample */
+            w.v = ip->pc.st[ip->phase].v_mm_s;
+            const lsm_interp_prep *q = piece_for(ip, &w);
+            if (q != NULL && q->pc.T_s > R0) {
+                take(ip, q, left, true);
             } else {
                 advance_path(ip, ds);
+                ip->gen = ip->pl->gen; /* once per boundary: the current piece stays valid if none was found */
             }
-            ip->gen = g; /* once per ramp end: the current piece stays valid if none was found */
             adv = left;
             continue;
         }
@@ -411,19 +610,27 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s);
             return;
         }
+        const uint32_t ended_serial = ip->serial;
         end_piece(ip);
         if (ip->pc.stop || !(left > R0))
             return;
-        /* the next piece starts inside this cycle: plan it and sample it at the rest of the cycle */
-        lsm_piece np;
-        if (plan_from_here(ip, ip->v_mm_s, LSM_PIECE_NORMAL, &np) == LSM_OK || np.T_s > R0) {
-            if (np.T_s > R0) {
-                start_piece(ip, &np, left);
-                adv = left;
-                continue;
-            }
-        }
-        return;
+        /* the next piece starts inside this cycle: take it (or plan it) and sample it at the rest of the cycle */
+        swpt w;
+        memset(&w, 0, sizeof w);
+        w.kind = LSM_INTERP_SW_BOUNDARY;
+        w.phase = LSM_PIECE_PHASES;
+        w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_NORMAL;
+        w.blk = ip->blk;
+        w.off = ip->off_mm;
+        w.v = ip->v_mm_s;
+        const uint32_t cur = ip->serial;
+        ip->serial = ended_serial; /* (end_piece does not change it: the successor follows this piece) */
+        const lsm_interp_prep *q = piece_for(ip, &w);
+        ip->serial = cur;
+        if (q == NULL || !(q->pc.T_s > R0))
+            return;
+        take(ip, q, left, false);
+        adv = left;
     }
 }
 
@@ -456,8 +663,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
     lsm_planner *pl = ip->pl;
     const lsm_real dt = pl->cfg.cycle_s;
     ip->cycles++;
-    /* at rest or between pieces: start when there is something to do */
     if (!ip->running) {
+        /* at rest or between pieces: start when there is something to do */
         bool go = false;
         if (ip->state == LSM_INTERP_RUN)
             go = true;
@@ -473,61 +680,67 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
                 ip->off_mm = R0;
                 activate(ip);
             }
+            swpt w;
             if (ip->v_mm_s == R0 && ip->hold_req) {
                 ip->state = LSM_INTERP_HELD; /* a hold at rest */
-            } else {
-                lsm_piece np;
-                if (plan_from_here(ip, ip->v_mm_s, LSM_PIECE_NORMAL, &np) != LSM_E_EMPTY && np.T_s > R0)
-                    start_piece(ip, &np, dt);
+            } else if (next_switch(ip, &w)) {
+                const lsm_interp_prep *q = piece_for(ip, &w);
+                if (q != NULL && q->pc.T_s > R0)
+                    take(ip, q, dt, false);
                 else if (!path_ahead(ip))
                     ip->state = pl->finished ? LSM_INTERP_DONE : LSM_INTERP_IDLE;
             }
         }
-        if (ip->running) {
+        if (ip->running)
             run_cycle(ip, dt);
-            goto out;
+    } else {
+        /* a new piece from the last sample (a = 0 there): prepared for this cycle, or (without lsm_interp_prepare)
+         * wanted now */
+        const lsm_interp_prep *q = &ip->prep;
+        if (q->ready && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial && q->cycle == ip->cycles &&
+            q->gen == pl->gen) {
+            take(ip, q, dt, true);
+        } else if (!ip->bg && at_a_zero(ip) && !ip->pc.hold && (ip->hold_req || ip->gen != pl->gen)) {
+            swpt w;
+            memset(&w, 0, sizeof w);
+            w.kind = LSM_INTERP_SW_SAMPLE;
+            w.cycle = ip->cycles;
+            w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+            w.blk = ip->blk;
+            w.off = ip->off_mm;
+            w.v = ip->v_mm_s;
+            q = piece_for(ip, &w);
+            if (q != NULL)
+                take(ip, q, dt, true);
+            else if (is_cruise(ip->phase) && w.mode == LSM_PIECE_REPLAN)
+                ip->gen = pl->gen; /* in a cruise the current piece stays valid: no new try until a change */
         }
-        goto out;
+        if (ip->running)
+            run_cycle(ip, dt);
     }
-    {
-        /* replanning where a = 0 */
-        const uint8_t p = ip->phase;
-        const bool a_zero = p == 0u || p == 8u || p == 16u || (ip->tau == R0 && (p == 1u || p == 9u));
-        if (a_zero && !ip->pc.hold) {
-            lsm_piece np;
-            if (ip->hold_req) {
-                if (lsm_planner_plan_piece(pl, ip->blk, ip->off_mm, ip->v_mm_s, LSM_PIECE_HOLD, &np) == LSM_OK) {
-                    if (np.T_s > R0) {
-                        start_piece(ip, &np, dt);
-                    } else {
-                        ip->running = 0;
-                        ip->state = LSM_INTERP_HELD;
-                        goto out;
-                    }
-                }
-            } else if (ip->gen != pl->gen) {
-                /* In a cruise this is the point the planner verified the change from (lsm_planner_set_horizon):
-                 * if no new piece is found, the current one is still valid and runs on. At a ramp start the
-                 * planner verified the end of the ramp instead: the ramp end re-plans there. */
-                const bool cruise = p == 0u || p == 8u || p == 16u;
-                const uint32_t g = pl->gen;
-                if (lsm_planner_plan_piece(pl, ip->blk, ip->off_mm, ip->v_mm_s, LSM_PIECE_REPLAN, &np) == LSM_OK &&
-                    np.T_s > R0) {
-                    ip->replans++;
-                    start_piece(ip, &np, dt);
-                } else if (cruise) {
-                    ip->gen = g;
-                }
-            }
-        }
-        run_cycle(ip, dt);
-    }
-out:
     if (!ip->running) /* at rest (or stopped for good): the machine stands here */
         lsm_planner_set_horizon(pl, ip->blk, ip->off_mm, R0);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pos[i] = ip->pos[i];
     return (lsm_interp_state)ip->state;
+}
+
+lsm_status lsm_interp_prepare(lsm_interp *ip)
+{
+    if (ip == NULL)
+        return LSM_E_NULL;
+    ip->bg = 1;
+    swpt w;
+    if (!next_switch(ip, &w))
+        return LSM_OK;
+    const lsm_interp_prep *q = &ip->prep;
+    if (same_switch(ip, q, &w))
+        return q->ready ? LSM_OK : LSM_E_INFEASIBLE;
+    ip->prepared++;
+    const lsm_status st = plan_switch(ip, &w);
+    if (st != LSM_OK && w.kind == LSM_INTERP_SW_SAMPLE && w.mode == LSM_PIECE_REPLAN && is_cruise(ip->phase))
+        ip->gen = ip->pl->gen; /* in a cruise the current piece stays valid: accept the change */
+    return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
 }
 
 void lsm_interp_hold(lsm_interp *ip)

@@ -24,6 +24,16 @@
  * able to re-plan and at what speed (lsm_planner_set_horizon: the end of the current ramp, or the cursor); if
  * no new piece is found, the current one stays valid and runs on.
  *
+ * Background planning (lsm_interp_prepare). Every new piece starts where a = 0: at the start from rest, at the end
+ * of the current piece (its successor), or, to replace the rest of the current piece, at a "switch point" of it: a
+ * sample in a cruise, the start of a ramp, or the end of a ramp (exactly, between samples). lsm_interp_prepare plans
+ * the next piece the interpolator will need into one slot, tagged with its switch point and the planner generation
+ * it was planned for; lsm_interp_step takes it when it reaches that point. Called between cycles (from the
+ * background, or before each step in a synchronous loop), it leaves the control cycle with no planning: the cycle
+ * only evaluates. A cycle that reaches a switch point where a piece is needed and none is prepared plans it itself
+ * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans; callers that prepare see 0.
+ * Pieces planned ahead of a switch point at lead_cycles > 0 leave the background that many cycles to finish.
+ *
  * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
  * at once; both through the planner, so every change is a verified sin² ramp (jerk-limited). 0 % is a feed hold.
  * Feed hold: at the next point where a = 0 the machine decelerates along the path with one ramp to rest (verified
@@ -51,6 +61,32 @@ typedef enum lsm_interp_state {
     LSM_INTERP_HELD = 2, /* at rest after a feed hold (or 0 % override) */
     LSM_INTERP_DONE = 3  /* at rest on the end of a finished program */
 } lsm_interp_state;
+
+/* Where a prepared piece starts. */
+typedef enum lsm_interp_switch {
+    LSM_INTERP_SW_NONE = 0,
+    LSM_INTERP_SW_SAMPLE = 1,   /* at the start of the cycle whose count is `cycle`, from the sample before it */
+    LSM_INTERP_SW_BOUNDARY = 2, /* at phase boundary `phase` of the piece `serial` (1, 9: ramp starts; 8, 16: ramp
+                                   ends; LSM_PIECE_PHASES: its end) */
+    LSM_INTERP_SW_REST = 3      /* at rest: the next piece from the cursor */
+} lsm_interp_switch;
+
+/* A piece planned ahead (lsm_interp_prepare) and the switch point it starts at. */
+typedef struct lsm_interp_prep {
+    lsm_piece pc;
+    uint64_t cycle;       /* SW_SAMPLE: the cycle count it starts at */
+    uint32_t serial;      /* the piece it follows or replaces (SW_SAMPLE, SW_BOUNDARY); the last piece (SW_REST) */
+    uint32_t gen;         /* planner generation it was planned for */
+    uint32_t blk;         /* where it starts (block id, offset) and its speed there */
+    lsm_real off_mm;
+    lsm_real v_mm_s;
+    uint8_t kind;         /* lsm_interp_switch */
+    uint8_t phase;        /* SW_BOUNDARY */
+    uint8_t ready;        /* pc holds the piece */
+    uint8_t failed;       /* no piece fits at this switch point for this generation (do not try again) */
+    uint8_t mode;         /* lsm_piece_mode it was planned with */
+    uint8_t reserved[3];
+} lsm_interp_prep;
 
 typedef struct lsm_interp {
     lsm_planner *pl;
@@ -85,6 +121,13 @@ typedef struct lsm_interp {
     uint64_t cycles;             /* cycles stepped */
     uint32_t replans;            /* pieces taken while moving (replanning) */
     uint32_t plan_errors;        /* plan_piece calls that returned an error */
+    uint32_t serial;             /* pieces started */
+    uint32_t lead_cycles;        /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
+    uint32_t tick_plans;         /* pieces planned inside lsm_interp_step (none were prepared) */
+    uint8_t bg;                  /* lsm_interp_prepare is in use: the cycle plans only what it must */
+    uint8_t reserved2[3];
+    uint32_t prepared;           /* pieces planned by lsm_interp_prepare */
+    lsm_interp_prep prep;        /* the slot of lsm_interp_prepare */
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. */
@@ -92,6 +135,11 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl);
 
 /* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. */
 lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
+
+/* Background work between cycles: plans the next piece the interpolator will need (see above). Returns LSM_OK (a
+ * piece is ready, or nothing is needed), LSM_E_INFEASIBLE (none fits at the next switch point: the current plan
+ * stays valid and is followed), LSM_E_NULL. At most one piece plan per call. */
+lsm_status lsm_interp_prepare(lsm_interp *ip);
 
 /* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first). */
 void lsm_interp_hold(lsm_interp *ip);

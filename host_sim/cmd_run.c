@@ -89,6 +89,9 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
     json_num(f, r->plan_ns_per_block);
     fprintf(f, ", \"interp_ns_per_cycle\": ");
     json_num(f, r->interp_ns_per_cycle);
+    fprintf(f, ", \"prepare_ns_per_piece\": ");
+    json_num(f, r->prepare_ns_per_piece);
+    fprintf(f, ", \"pieces_prepared\": %u, \"pieces_planned_in_cycle\": %u", r->prepared, r->tick_plans);
     fprintf(f, "}\n}\n");
 }
 

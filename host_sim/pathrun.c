@@ -365,7 +365,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     bool fin = false;
     const double max_t = o->max_time_s > 0 ? o->max_time_s : 3600.0;
     const uint64_t max_cycles = (uint64_t)(max_t / cfg.cycle_s) + 1;
-    double t_append = 0, t_step = 0;
+    double t_append = 0, t_step = 0, t_prep = 0;
     size_t ev = 0;
     int rc = 0;
     uint32_t pieces0 = 0;
@@ -408,7 +408,10 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
                 lsm_interp_set_override(ip, e->value);
         }
         double pos[LSM_MAX_AXES];
+        const double tp = now_ns();
+        (void)lsm_interp_prepare(ip); /* background planning, between cycles */
         const double t0 = now_ns();
+        t_prep += t0 - tp;
         const lsm_interp_state s = lsm_interp_step(ip, pos);
         t_step += now_ns() - t0;
         const lsm_pblock *cb = lsm_planner_block(pl, ip->blk);
@@ -438,11 +441,14 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     r->duration_s = (double)r->cycles * cfg.cycle_s;
     r->plan_ns_per_block = appended ? t_append / (double)appended : 0;
     r->interp_ns_per_cycle = out->n ? t_step / (double)out->n : 0;
+    r->prepare_ns_per_piece = ip->prepared ? t_prep / (double)ip->prepared : 0;
     (void)pieces0;
 done:
     r->stats = pl->stats;
     r->replans = ip->replans;
     r->plan_errors = ip->plan_errors;
+    r->tick_plans = ip->tick_plans;
+    r->prepared = ip->prepared;
     free(store);
     free(pl);
     free(ip);

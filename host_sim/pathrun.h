@@ -69,10 +69,13 @@ typedef struct sim_run_result {
     size_t prog_blocks;        /* motion blocks in the program */
     double prog_length_mm;     /* length of the programmed path (X Y Z) */
     double plan_ns_per_block;  /* host time spent in append (corner smoothing + backward pass) per block */
-    double interp_ns_per_cycle;/* host time per interpolator cycle (piece planning included) */
+    double interp_ns_per_cycle;/* host time per interpolator cycle (lsm_interp_step; tick_plans included) */
+    double prepare_ns_per_piece;/* host time of lsm_interp_prepare (background piece planning) per prepared piece */
     double piece_ns;           /* host time per planned piece */
     lsm_planner_stats stats;
     uint32_t replans, plan_errors;
+    uint32_t prepared;         /* pieces planned in the background (lsm_interp_prepare) */
+    uint32_t tick_plans;       /* pieces planned inside the control cycle (none prepared in time) */
     uint32_t pl_block_bytes;   /* sizeof(lsm_pblock) of this build */
     char err[320];
 } sim_run_result;

@@ -242,6 +242,7 @@ typedef struct run_opts {
     int n_ovr;
     long ovr_at[4];
     double ovr_val[4];
+    int no_prepare;          /* do not call lsm_interp_prepare (every piece is planned inside the cycle) */
 } run_opts;
 
 typedef struct run_res {
@@ -253,6 +254,7 @@ typedef struct run_res {
     double held_motion;      /* largest move while held */
     long held_cycles;
     uint32_t fallbacks, underruns;
+    uint32_t tick_plans, prepared;
 } run_res;
 
 static double dist_geom(const lsm_geom *g, const double x[3])
@@ -378,6 +380,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
             if (k == o->ovr_at[i])
                 assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)o->ovr_val[i]), LSM_OK);
         lsm_real pos[LSM_MAX_AXES];
+        if (!o->no_prepare)
+            (void)lsm_interp_prepare(&ip);
         const lsm_interp_state s = lsm_interp_step(&ip, pos);
         if (r->n == cap) {
             cap *= 2;
@@ -401,6 +405,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
         }
     }
     r->fallbacks = pl.stats.plan_fallbacks;
+    r->tick_plans = ip.tick_plans;
+    r->prepared = ip.prepared;
     if (!r->done && getenv("TEST_DUMP"))
         print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u running %d\n",
                       next, p->n, fin, ip.state, lsm_planner_count(&pl), lsm_planner_free(&pl), pl.fit_n, ip.blk,
@@ -521,7 +527,7 @@ static void scenario(int kind, const char *name, int mode)
 {
     uint64_t rs = rng(kind * 131 + mode);
     static prog p;
-    long ok = 0, underruns = 0, held = 0;
+    long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0;
     for (long c = 0; c < g_count; c++) {
         gen(&p, &rs, kind);
         if (p.n == 0)
@@ -530,10 +536,11 @@ static void scenario(int kind, const char *name, int mode)
         memset(&o, 0, sizeof o);
         o.capacity = kind == 3 ? 256 : 16 + (uint32_t)(test_urand(&rs) * 64);
         o.hold_at = o.resume_at = -1;
-        if (mode == 1) { /* hold and resume */
+        o.no_prepare = mode >= 4;
+        if (mode == 1 || mode == 4) { /* hold and resume */
             o.hold_at = 20 + (long)(test_urand(&rs) * 400);
             o.resume_at = o.hold_at + 200 + (long)(test_urand(&rs) * 300);
-        } else if (mode == 2) { /* override changes */
+        } else if (mode == 2 || mode == 5) { /* override changes */
             o.n_ovr = 3;
             for (int i = 0; i < 3; i++) {
                 o.ovr_at[i] = 10 + (long)(test_urand(&rs) * 1500);
@@ -546,16 +553,24 @@ static void scenario(int kind, const char *name, int mode)
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
-        if (mode == 1 && r.held_cycles > 0) {
+        if ((mode == 1 || mode == 4) && r.held_cycles > 0) {
             held++;
             if (r.held_motion != 0)
                 fail_msg("%s %ld: moved %.3g mm while held", name, c, r.held_motion);
         }
         underruns += r.underruns;
+        tick_plans += r.tick_plans;
+        prepared += r.prepared;
         ok++;
         free(r.q);
     }
-    print_message("%s: %ld programs, %ld held, %ld underrun stops\n", name, ok, held, underruns);
+    print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle\n",
+                  name, ok, held, underruns, prepared, tick_plans);
+    /* with lsm_interp_prepare before every cycle, the cycle plans only pieces that follow one shorter than a cycle */
+    if (mode < 4 && tick_plans * 100 > prepared)
+        fail_msg("%s: %ld of %ld pieces planned inside the cycle", name, tick_plans, prepared);
+    if (mode >= 4 && prepared != 0)
+        fail_msg("%s: %ld pieces prepared without lsm_interp_prepare", name, prepared);
     assert_true(ok > 0);
 }
 
@@ -589,6 +604,14 @@ static void test_override(void **state)
     (void)state;
     scenario(2, "override", 2);
 }
+/* The same with every piece planned inside the cycle (callers that never call lsm_interp_prepare). */
+static void test_no_prepare(void **state)
+{
+    (void)state;
+    scenario(2, "hold (no prepare)", 4);
+    scenario(2, "override (no prepare)", 5);
+}
+
 static void test_underrun(void **state)
 {
     (void)state;
@@ -774,7 +797,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_block_size), cmocka_unit_test(test_bad_blocks), cmocka_unit_test(test_lines),
         cmocka_unit_test(test_arcs),       cmocka_unit_test(test_mixed),      cmocka_unit_test(test_dense),
         cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),  cmocka_unit_test(test_underrun),
-        cmocka_unit_test(test_resume_after_underrun),
+        cmocka_unit_test(test_resume_after_underrun), cmocka_unit_test(test_no_prepare),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -207,6 +207,7 @@ void node_la_step(node_la *la, lsm_co_path *cp, const double *cpm, lsm_co_path_r
     }
 
     lsm_real p[LSM_MAX_AXES];
+    (void)lsm_interp_prepare(&la->ip); /* background planning between cycles */
     (void)lsm_interp_step(&la->ip, p);
     for (unsigned k = 0; k < la->n_axes; k++) {
         la->vel[k] = ((double)p[k] - la->pos[k]) / la->cycle_s;

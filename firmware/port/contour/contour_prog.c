@@ -170,7 +170,8 @@ lsm_contour_result lsm_contour_cycle(lsm_contour *c)
         else if (st != LSM_E_FULL)
             return fail(c, st);
     }
-    /* 2. one interpolator cycle */
+    /* 2. background planning (lsm_interp_prepare), then one interpolator cycle */
+    (void)lsm_interp_prepare(&c->ip);
     const lsm_interp_state s = lsm_interp_step(&c->ip, c->pos);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         c->hash = hash_u32(c->hash, bits_of(c->pos[i]));

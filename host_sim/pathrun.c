@@ -369,7 +369,6 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     size_t ev = 0;
     int rc = 0;
     uint32_t pieces0 = 0;
-    double t_wall0 = now_ns();
     uint64_t k_done = 0;
     for (uint64_t k = 0;; k++) {
         if (!fin) {
@@ -429,14 +428,10 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
             rc = -1;
             goto done;
         }
-        if (o->progress && (k & 0xFFFF) == 0 && k > 0 && now_ns() - t_wall0 > 2e9) {
-            fprintf(stderr, "\r  %5.1f %% of the program, %.1f s machine time", 100.0 * (double)next / (double)(p->n ? p->n : 1),
-                    (double)k * cfg.cycle_s);
-            fflush(stderr);
-        }
+        if (o->progress && (k & 0xFFF) == 0 && p->n) /* done: the source line being run, of the last one */
+            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, cb ? (double)cb->seq / (double)p->v[p->n - 1].b.line : 0,
+                        (double)k * cfg.cycle_s);
     }
-    if (o->progress && now_ns() - t_wall0 > 2e9)
-        fprintf(stderr, "\r%60s\r", "");
     r->cycles = k_done + 1;
     r->duration_s = (double)r->cycles * cfg.cycle_s;
     r->plan_ns_per_block = appended ? t_append / (double)appended : 0;
@@ -727,6 +722,8 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
     const double t0 = now_ns();
     for (int pass = 0; pass < 2; pass++) {
         lim.refine_iters = pass ? SIM_VPOP_REFINE : 0;
+        if (o->progress)
+            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, 0.5 * pass, -1);
         double *S2 = NULL;
         size_t n2 = 0;
         if (sim_vpop_plan(&path, &lim, cfg.cycle_s, (size_t)(max_t / cfg.cycle_s), &S2, &n2, &vs) != 0)
@@ -901,6 +898,9 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
                     r->max_follow_err[a] = fe;
                 q2 = q1;
                 q1 = q0;
+                if (o->progress && (k & 0xFFF) == 0)
+                    o->progress(o->progress_ctx, SIM_RUN_PHASE_DRIVES, (i + (double)k / (double)r->n) / m->n_axes,
+                                (double)k * dt);
             }
         }
     }

@@ -33,6 +33,12 @@ typedef struct sim_run_event {
     double value;
 } sim_run_event;
 
+/* Progress of a run, for a progress bar (optional): the phase, done in [0, 1] within it (the reference planner
+ * reports only its passes), and how far the run has got in machine time (s). Called every 4096 cycles of the
+ * interpolator and of each drive, and between the reference planner's passes. */
+typedef enum sim_run_phase { SIM_RUN_PHASE_PLAN = 0, SIM_RUN_PHASE_DRIVES = 1 } sim_run_phase;
+typedef void (*sim_run_progress_fn)(void *ctx, sim_run_phase phase, double done, double machine_time_s);
+
 typedef struct sim_run_opts {
     const sim_machine *machine;
     const char *text;          /* the G-code program */
@@ -45,7 +51,8 @@ typedef struct sim_run_opts {
     const sim_run_event *events;
     size_t n_events;
     lsm_planner_config *cfg_override; /* optional: planner configuration to use instead of the machine's */
-    bool progress;             /* a progress line on stderr for long runs */
+    sim_run_progress_fn progress; /* optional progress reports (NULL: none) */
+    void *progress_ctx;
 } sim_run_opts;
 
 typedef struct sim_run_result {

@@ -106,17 +106,30 @@ static lsm_status one_line(const char *setup, const char *line, lsm_gcode_result
     return lsm_gcode_parse_line(&p, line, strlen(line), res);
 }
 
+/* The line under test comes after the setup's lines: its physical line number is one more than the number of
+ * line endings in the setup (blank and comment lines count). */
+static uint32_t line_after(const char *setup)
+{
+    uint32_t n = 1;
+    for (const char *c = setup; c && *c; c++)
+        n += *c == '\n';
+    return n;
+}
+
 static void expect_error(const char *setup, const char *line, lsm_status code, uint32_t column)
 {
     lsm_gcode_result res;
     lsm_status st = one_line(setup, line, &res);
-    if (st != code || res.err.column != column) {
-        print_error("line \"%s\": got %d (%s) at column %u, expected %d (%s) at column %u\n", line, (int)st,
-                    lsm_status_str(st), (unsigned)res.err.column, (int)code, lsm_status_str(code), (unsigned)column);
+    const uint32_t want_line = line_after(setup);
+    if (st != code || res.err.column != column || res.err.line != want_line) {
+        print_error("line \"%s\": got %d (%s) at %u:%u, expected %d (%s) at %u:%u\n", line, (int)st,
+                    lsm_status_str(st), (unsigned)res.err.line, (unsigned)res.err.column, (int)code,
+                    lsm_status_str(code), (unsigned)want_line, (unsigned)column);
     }
     assert_int_equal(st, code);
     assert_int_equal(res.status, code);
     assert_int_equal(res.err.code, code);
+    assert_int_equal(res.err.line, want_line);
     assert_int_equal(res.err.column, column);
     assert_int_equal(res.n_blocks, 0);
 }
@@ -792,6 +805,59 @@ static void test_errors_are_atomic(void **state)
     assert_int_equal(r->errs[0].code, LSM_E_GC_WORD_REPEATED);
 }
 
+/* The malformed inputs the issue lists, one per line of one program streamed in chunks of several sizes: each
+ * is reported with its exact code, physical line and column, changes nothing, and the parser goes on with the
+ * next line (the last line still moves from where the first one left the machine). */
+static void test_err_issue_cases_in_one_program(void **state)
+{
+    (void)state;
+    static char prog[2048];
+    size_t n = 0;
+    n += (size_t)snprintf(prog + n, sizeof prog - n,
+                          "G21 G90 G17 F600\n"          /* 1 ok */
+                          "G1 X1 Q5\n"                  /* 2 unknown word Q, column 7 */
+                          "G1 X\n"                      /* 3 missing argument, column 4 */
+                          "G2 X30 Y0 R10\n"             /* 4 chord 30 > diameter 20, column 11 (R) */
+                          "G2 X10 Y0 I0 J0\n"           /* 5 centre on the start, column 11 (I) */
+                          "G2 X10 Y0 I5.1\n"            /* 6 radii 5.1 / 4.9 differ, column 1 (G2) */
+                          "G1 X12345678901234567890\n"  /* 7 number too large, column 4 */
+                          "G1 X2");                     /* 8 overlong: column LSM_GCODE_MAX_LINE + 1 */
+    memset(prog + n, ' ', LSM_GCODE_MAX_LINE + 40);
+    n += LSM_GCODE_MAX_LINE + 40;
+    static const char junk[] = "Y1\n\x89PNG\x1a\x00\x7f\xff\n"     /* 9 binary junk, column 1 */
+                               "G1 X3\n";                         /* 10 ok */
+    memcpy(prog + n, junk, sizeof junk - 1);
+    n += sizeof junk - 1;
+    static const struct {
+        lsm_status code;
+        uint32_t line, column;
+    } want[] = {
+        {LSM_E_GC_UNKNOWN_WORD, 2, 7},  {LSM_E_GC_MISSING_ARG, 3, 4},    {LSM_E_GC_ARC_RADIUS, 4, 11},
+        {LSM_E_GC_ARC_CENTRE, 5, 11},   {LSM_E_GC_ARC_MISMATCH, 6, 1},   {LSM_E_GC_NUMBER_RANGE, 7, 4},
+        {LSM_E_GC_LINE_TOO_LONG, 8, LSM_GCODE_MAX_LINE + 1},             {LSM_E_GC_BINARY, 9, 1},
+    };
+    static const size_t chunks[] = {0, 1, 3, 7, 64, 1000};
+    for (size_t c = 0; c < sizeof chunks / sizeof chunks[0]; c++) {
+        run_prog_opt(&g_run, prog, n, chunks[c], NULL);
+        assert_int_equal(g_run.n_err, (int)(sizeof want / sizeof want[0]));
+        for (size_t k = 0; k < sizeof want / sizeof want[0]; k++) {
+            if (g_run.errs[k].code != want[k].code || g_run.errs[k].line != want[k].line ||
+                g_run.errs[k].column != want[k].column)
+                print_error("chunk %zu, error %zu: got %d at %u:%u, expected %d at %u:%u\n", chunks[c], k,
+                            (int)g_run.errs[k].code, (unsigned)g_run.errs[k].line, (unsigned)g_run.errs[k].column,
+                            (int)want[k].code, (unsigned)want[k].line, (unsigned)want[k].column);
+            assert_int_equal(g_run.errs[k].code, want[k].code);
+            assert_int_equal(g_run.errs[k].line, want[k].line);
+            assert_int_equal(g_run.errs[k].column, want[k].column);
+        }
+        assert_int_equal(g_run.n, 1); /* only line 10 moved, from the origin */
+        assert_int_equal(g_run.blocks[0].line, 10);
+        assert_mm(g_run.blocks[0].start[0], 0);
+        assert_mm(g_run.blocks[0].end[0], 3);
+        assert_int_equal(g_run.lines, 10);
+    }
+}
+
 static void test_status_strings(void **state)
 {
     (void)state;
@@ -824,6 +890,7 @@ int main(void)
         cmocka_unit_test(test_err_arcs),
         cmocka_unit_test(test_err_unused_values_axes),
         cmocka_unit_test(test_errors_are_atomic),
+        cmocka_unit_test(test_err_issue_cases_in_one_program),
         cmocka_unit_test(test_status_strings),
     };
     return cmocka_run_group_tests_name(LSM_REAL_IS_FLOAT ? "gcode_float" : "gcode", tests, NULL, NULL);

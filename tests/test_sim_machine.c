@@ -8,6 +8,8 @@
  * - bad files are rejected with the right status, and the message names the key and its line:column.
  * The machines directory is found from this file's path (__FILE__), or from $LSM_MACHINES_DIR.
  */
+#define _POSIX_C_SOURCE 200809L /* opendir */
+#include <dirent.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -162,6 +164,51 @@ static void test_shipped_papers(void **state)
     assert_rel(z->snap_max_u_s4, PI * 50000 / (2 * 0.006), 1e-3);
     for (int i = 0; i < m.n_axes; i++)
         check_drive_stable(&m, &m.axes[i]);
+}
+
+/* Every .json file in host_sim/machines loads, and every drive in it is stable; the chosen Kombarov case is the axis
+ * docs/machine_file.md describes (Table 1 Test 2 limits, 45 Hz resonance with zeta 0.02, kv 40 /s, no feed-forward). */
+static void test_shipped_all(void **state)
+{
+    (void)state;
+    DIR *dir = opendir(g_dir);
+    assert_non_null(dir);
+    int n = 0;
+    bool positioning = false;
+    for (struct dirent *e = readdir(dir); e; e = readdir(dir)) {
+        const size_t len = strlen(e->d_name);
+        if (len < 6 || strcmp(e->d_name + len - 5, ".json") != 0)
+            continue;
+        sim_machine m;
+        char err[256];
+        const sim_machine_status st = sim_machine_load_file(machine_path(e->d_name), &m, err, sizeof err);
+        if (st != SIM_MACHINE_OK)
+            print_error("%s: %s\n", e->d_name, err);
+        assert_int_equal(st, SIM_MACHINE_OK);
+        for (int i = 0; i < m.n_axes; i++)
+            check_drive_stable(&m, &m.axes[i]);
+        n++;
+        if (strcmp(e->d_name, "kombarov_positioning.json") == 0) {
+            positioning = true;
+            assert_int_equal(m.n_axes, 1);
+            const sim_machine_axis *x = sim_machine_axis_by_name(&m, 'X');
+            assert_non_null(x);
+            assert_rel(x->v_max_u_s, 220, 0);
+            assert_rel(x->a_max_u_s2, 1570, 0);
+            assert_rel(x->j_max_u_s3, 16000, 0);
+            assert_rel(x->snap_max_u_s4, 560000, 0);
+            assert_rel(x->drive.kv_1_s, 40, 0);
+            assert_true(x->drive.vff_gain == 0 && x->drive.aff_gain == 0);
+            sim_drive_modes md;
+            sim_drive_modes_analytic(&x->drive, &md);
+            assert_rel(md.f_res_hz, 45.0, 2e-3);
+            assert_rel(md.zeta_res, 0.02, 2e-3);
+        }
+    }
+    closedir(dir);
+    printf("  %d machine files\n", n);
+    assert_true(n >= 4);
+    assert_true(positioning);
 }
 
 /* ---------------------------------------------------------------- bad files */
@@ -325,6 +372,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shipped_router),
         cmocka_unit_test(test_shipped_papers),
+        cmocka_unit_test(test_shipped_all),
         cmocka_unit_test(test_good_minimal_and_rotary),
         cmocka_unit_test(test_bad_files),
     };

@@ -29,6 +29,8 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 
 DPI = 110
+# legends sit above the (top) panel, right-aligned, so that they never hide data
+_LEGEND = dict(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize="small", frameon=False)
 # per-axis columns: <AXIS>_<kind>[_<unit>...], AXIS one upper-case letter, kind one of these
 _AXIS_COL = re.compile(r"^([A-Z])_(set|act|err|v|a|j|cur)(?:_[A-Za-z0-9_]+)?$")
 _ALIASES = {"t": "t_s", "time": "t_s", "time_s": "t_s", "feed": "feed_mm_s", "feed_cmd": "feed_cmd_mm_s"}
@@ -128,42 +130,44 @@ def plot_feed(cols, out_png, title=None):
     if "feed_mm_s" not in cols:
         return None
     fig, ax = plt.subplots(figsize=(10, 4))
-    ax.plot(t, cols["feed_mm_s"], lw=1.0, label="feed")
+    ax.plot(t, cols["feed_mm_s"], lw=1.0, label="path feed of the setpoints")
     if "feed_cmd_mm_s" in cols:
         ax.plot(t, cols["feed_cmd_mm_s"], lw=0.8, ls="--", color="0.4", label="programmed")
-        ax.legend(loc="best")
+    ax.legend(**_LEGEND)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("feed [mm/s]")
-    ax.set_title(title or "Feed")
+    ax.set_title(title or "Feed", loc="left")
     ax.grid(True, alpha=0.3)
     return _save(fig, out_png)
 
 
-def _plot_axis_kind(cols, out_png, kind, power, label, limits=None, limit_key=None, title=None):
+def _plot_axis_kind(cols, out_png, kind, power, label, limits=None, limit_key=None, title=None, trace=None):
     t = _time(cols)
     axes = [(a, k[kind]) for a, k in axis_columns(cols).items() if kind in k]
     if not axes:
         return None
     fig, plots = plt.subplots(len(axes), 1, figsize=(10, 2.2 + 1.8 * len(axes)), sharex=True, squeeze=False)
     for (a, name), ax in zip(axes, plots[:, 0]):
-        ax.plot(t, cols[name], lw=0.9)
+        ax.plot(t, cols[name], lw=0.9, label=trace or "%s %s" % (a, label))
         if limits and a in limits and limit_key:
             lim = limits[a][limit_key]
-            ax.axhline(lim, color="r", ls="--", lw=0.8)
+            ax.axhline(lim, color="r", ls="--", lw=0.8, label="\u00b1%s_max (machine file)" % limit_key)
             ax.axhline(-lim, color="r", ls="--", lw=0.8)
         ax.set_ylabel("%s %s [%s]" % (a, label, _unit(a, power)))
         ax.grid(True, alpha=0.3)
     plots[-1, 0].set_xlabel("t [s]")
-    plots[0, 0].set_title(title or "%s per axis" % label.capitalize())
+    plots[0, 0].set_title(title or "%s per axis" % label.capitalize(), loc="left")
+    plots[0, 0].legend(**_LEGEND)
     return _save(fig, out_png)
 
 
 def plot_accel(cols, out_png, limits=None, title=None):
-    return _plot_axis_kind(cols, out_png, "a", 2, "acceleration", limits, "a", title)
+    return _plot_axis_kind(cols, out_png, "a", 2, "acceleration", limits, "a", title,
+                           "setpoint (backward difference)")
 
 
 def plot_jerk(cols, out_png, limits=None, title=None):
-    return _plot_axis_kind(cols, out_png, "j", 3, "jerk", limits, "j", title)
+    return _plot_axis_kind(cols, out_png, "j", 3, "jerk", limits, "j", title, "setpoint (backward difference)")
 
 
 def plot_error(cols, out_png, title=None):
@@ -173,7 +177,8 @@ def plot_error(cols, out_png, title=None):
     for a, k in axes.items():
         if "err" not in k and "set" in k and "act" in k:
             derived["%s_err" % a] = cols[k["set"]] - cols[k["act"]]
-    return _plot_axis_kind(derived, out_png, "err", 0, "following error", title=title or "Following error")
+    return _plot_axis_kind(derived, out_png, "err", 0, "following error", title=title or "Following error",
+                           trace="setpoint \u2212 actual")
 
 
 def plot_path(cols, out_png, plane=("X", "Y"), title=None):
@@ -191,20 +196,23 @@ def plot_path(cols, out_png, plane=("X", "Y"), title=None):
         feed = cols["feed_mm_s"]
         pts = np.column_stack([x, y])
         segs = np.stack([pts[:-1], pts[1:]], axis=1)
-        lc = LineCollection(segs, cmap="viridis", linewidths=2.0)
+        lc = LineCollection(segs, cmap="viridis", linewidths=2.0, label="setpoint (colour: feed)")
         lc.set_array(0.5 * (feed[:-1] + feed[1:]))
         ax.add_collection(lc)
         fig.colorbar(lc, ax=ax, label="feed [mm/s]")
     else:
-        ax.plot(x, y, lw=1.5)
+        ax.plot(x, y, lw=1.5, label="setpoint")
     if "act" in axes[u] and "act" in axes[v] and ku != axes[u]["act"]:
         ax.plot(cols[axes[u]["act"]], cols[axes[v]["act"]], lw=0.6, color="0.3", alpha=0.6, label="actual")
-        ax.legend(loc="best")
+    if len(x):
+        ax.plot([x[0]], [y[0]], "o", color="tab:green", ms=5, label="start")
+        ax.plot([x[-1]], [y[-1]], "s", color="tab:red", ms=5, label="end")
+    ax.legend(**dict(_LEGEND, ncol=2))
     ax.set_xlabel("%s [%s]" % (u, _unit(u, 0)))
     ax.set_ylabel("%s [%s]" % (v, _unit(v, 0)))
     ax.set_aspect("equal", adjustable="datalim")
     ax.autoscale_view()
-    ax.set_title(title or "Path coloured by feed")
+    ax.set_title(title or "Path coloured by feed", loc="left")
     ax.grid(True, alpha=0.3)
     return _save(fig, out_png)
 

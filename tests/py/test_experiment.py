@@ -2,6 +2,7 @@
 firmware's own plans, and rejects bad input."""
 import cmath
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -230,3 +231,94 @@ def test_kombarov_positioning_machine(sim):
     assert out["ratio_max"] < 1.05 and out["ratio_rms"] < 1.05
     ff = sim("experiment", "kombarov", "--machine", m, "--vff", 1, "--aff", 1, "--settle-window", 1, "--json")
     assert ff["ratio_residual_max"] < 2
+
+
+# ---- the JSON keys documented in docs/host_sim.md, and the ratios ----
+
+RATIOS = {  # ratio key: (numerator profile, per-profile key); the denominator is always sin2
+    "ratio_max": ("trapezoid", "max_following_error"), "ratio_rms": ("trapezoid", "rms_following_error"),
+    "ratio_max_cjerk": ("cjerk", "max_following_error"), "ratio_rms_cjerk": ("cjerk", "rms_following_error"),
+    "ratio_residual_max_cjerk": ("cjerk", "residual_max_error"),
+    "ratio_motion_max": ("trapezoid", "motion_max_following_error"),
+    "ratio_motion_rms": ("trapezoid", "motion_rms_following_error"),
+    "ratio_residual_max": ("trapezoid", "residual_max_error"), "ratio_residual_rms": ("trapezoid", "residual_rms_error"),
+    "ratio_settle": ("trapezoid", "settle_time"),
+    "ratio_spectral_resonance": ("trapezoid", "spectral_residual_resonance"),
+    "ratio_spectral_antiresonance": ("trapezoid", "spectral_residual_antiresonance"),
+}
+
+
+def documented_keys():
+    """The first column of the key table under **CLI.** in docs/host_sim.md: (top-level keys, per-profile keys),
+    and the sub-keys listed for `drive` and `profiles.*.limits`."""
+    text = (Path(__file__).resolve().parents[2] / "docs" / "host_sim.md").read_text(encoding="utf-8")
+    table = text[text.index("| Key | Unit | Meaning |"):]
+    table = table[:table.index("\n\n")]
+    top, per, sub = set(), set(), {}
+    for row in table.splitlines()[2:]:
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", row.strip()[1:-1])]  # cells split on unescaped |
+        names = re.findall(r"`([^`]+)`", cells[0])
+        if names[0].startswith("profiles.*."):  # `profiles.*.a`, `b`: both per profile
+            per.update(k.replace("profiles.*.", "") for k in names)
+        else:
+            top.update(names)
+        if cells[0] in ("`drive`", "`profiles.*.limits`"):
+            sub[cells[0].strip("`")] = set(re.findall(r"`([a-z_0-9]+)`", cells[2])) - {"load", "motor", "null"}
+    return top, per, sub
+
+
+def check_ratios(obj):
+    prof = obj["profiles"]
+    for key, (num, field) in RATIOS.items():
+        a, b = prof[num][field], prof["sin2"][field]
+        if a is None or b is None or b == 0:
+            assert obj[key] is None, key
+        else:
+            assert obj[key] == pytest.approx(a / b, rel=1e-7), key
+
+
+def test_kombarov_json_keys_documented(sim):
+    top, per, sub = documented_keys()
+    assert {"ratio_max", "ratio_rms", "ratio_max_cjerk", "profiles", "drive"} <= top and "limits" in per
+    out = sim("experiment", "kombarov", "--json")
+    assert set(out) == top  # every documented key, and no other
+    assert set(out["drive"]) == sub["drive"]
+    for name, snap in (("trapezoid", 25132000), ("sin2", 560000), ("cjerk", None)):
+        p = out["profiles"][name]
+        assert set(p) == per, name
+        assert p["limits"] == {"v_max_mm_s": 220, "a_max_mm_s2": 1570, "j_max_mm_s3": 16000, "snap_max_mm_s4": snap}
+        assert set(p["limits"]) == sub["profiles.*.limits"]
+    check_ratios(out)
+    # the sweep rows carry the same per-row keys
+    sweep = sim("experiment", "kombarov", "--sweep", "--resonance-hz", "50,100", "--damping", 0.05, "--json")
+    assert set(sweep) == {"distance_mm", "band_mm", "settle_window_s", "sweep"}
+    for row in sweep["sweep"]:
+        assert set(row) == {"drive", "step_test_settled", "profiles"} | set(RATIOS)
+        assert all(set(p) == per for p in row["profiles"].values())
+        check_ratios(row)
+
+
+def test_kombarov_text_output(sim):
+    """Without --json: one row per profile with its max and RMS error, and the two lines of ratios, which agree
+    with the JSON run."""
+    text = sim("experiment", "kombarov")
+    js = sim("experiment", "kombarov", "--json")
+    rows = {}
+    for line in text.splitlines():
+        m = re.match(r"\s+(trapezoid|sin2|cjerk)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s", line)
+        if m:
+            rows[m.group(1)] = [float(x) for x in m.groups()[1:]]
+    assert set(rows) == {"trapezoid", "sin2", "cjerk"}
+    for name, (dur, mx, rms) in rows.items():
+        p = js["profiles"][name]
+        assert dur == pytest.approx(p["duration"], abs=1e-4)
+        assert mx == pytest.approx(1e3 * p["max_following_error"], abs=1e-3)  # printed in um
+        assert rms == pytest.approx(1e3 * p["rms_following_error"], abs=1e-3)
+    m = re.search(r"trapezoid / sin2: max ([\d.]+)x, RMS ([\d.]+)x, residual ([\d.]+)x", text)
+    assert m and float(m.group(1)) == pytest.approx(js["ratio_max"], abs=0.006)
+    assert float(m.group(2)) == pytest.approx(js["ratio_rms"], abs=0.006)
+    assert float(m.group(3)) == pytest.approx(js["ratio_residual_max"], abs=0.006)
+    m = re.search(r"cjerk / sin2:\s+max ([\d.]+)x, RMS ([\d.]+)x, residual ([\d.]+)x", text)
+    assert m and float(m.group(1)) == pytest.approx(js["ratio_max_cjerk"], abs=0.006)
+    assert float(m.group(2)) == pytest.approx(js["ratio_rms_cjerk"], abs=0.006)
+    assert float(m.group(3)) == pytest.approx(js["ratio_residual_max_cjerk"], abs=0.006)

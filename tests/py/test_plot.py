@@ -165,3 +165,65 @@ def test_sim_plot_subcommand(sim, tmp_path):
     assert r.returncode == 2 and "usage" in r.stderr
     r = sim("plot", run_dir, "--bogus", "1", ok=False)
     assert r.returncode == 2
+
+
+def test_labels_units_legends(tmp_path, monkeypatch):
+    """Every run plot is readable on its own: a title, axis labels with units in brackets (mm, mm/s, mm/s², mm/s³;
+    rad for the rotary axis), and a legend naming what is drawn (the setpoint trace, the machine's limits, the
+    actual path, start and end); the feed colour bar is labelled with its unit."""
+    seen = {}
+    real_save = plot._save
+
+    def capture(fig, path):
+        axes = []
+        for ax in fig.axes:
+            leg = ax.get_legend()
+            axes.append({"x": ax.get_xlabel(), "y": ax.get_ylabel(), "title": ax.get_title(loc="left"),
+                         "legend": [t.get_text() for t in leg.get_texts()] if leg else []})
+        seen[os.path.basename(path)] = axes
+        return real_save(fig, path)
+
+    monkeypatch.setattr(plot, "_save", capture)
+    cols = run_cols(300)
+    cols["A_set_rad"] = np.linspace(0, 1, 300)
+    cols["A_a_rad_s2"] = np.zeros(300)
+    cols["A_j_rad_s3"] = np.zeros(300)
+    csv_path = tmp_path / "r.csv"
+    write_csv(csv_path, cols)
+    machine = tmp_path / "m.json"
+    machine.write_text('{"axes": [{"name": "X", "v_max_mm_s": 100, "a_max_mm_s2": 300, "j_max_mm_s3": 5000},'
+                       ' {"name": "Y", "v_max_mm_s": 100, "a_max_mm_s2": 300, "j_max_mm_s3": 5000},'
+                       ' {"name": "A", "v_max_deg_s": 90, "a_max_deg_s2": 180, "j_max_deg_s3": 3600}]}')
+    plot.plot_run(str(csv_path), str(tmp_path), prefix="p", machine=str(machine))
+    assert set(seen) == {"p_feed.png", "p_accel.png", "p_jerk.png", "p_path.png", "p_error.png"}
+
+    feed = seen["p_feed.png"][0]
+    assert feed["x"] == "t [s]" and feed["y"] == "feed [mm/s]" and feed["title"]
+    assert feed["legend"] == ["path feed of the setpoints"]
+    for name, what, unit, lim in (("p_accel.png", "acceleration", "s\u00b2", "a_max"),
+                                  ("p_jerk.png", "jerk", "s\u00b3", "j_max")):
+        panels = seen[name]
+        assert [p["y"] for p in panels] == ["X %s [mm/%s]" % (what, unit), "Y %s [mm/%s]" % (what, unit),
+                                            "A %s [rad/%s]" % (what, unit)]
+        assert panels[-1]["x"] == "t [s]" and panels[0]["title"]
+        assert panels[0]["legend"] == ["setpoint (backward difference)", "\u00b1%s (machine file)" % lim]
+    err = seen["p_error.png"]
+    assert [p["y"] for p in err] == ["X following error [mm]", "Y following error [mm]"]
+    assert err[0]["legend"] == ["setpoint \u2212 actual"] and err[-1]["x"] == "t [s]"
+    path, cbar = seen["p_path.png"]
+    assert path["x"] == "X [mm]" and path["y"] == "Y [mm]" and path["title"]
+    assert path["legend"] == ["setpoint (colour: feed)", "actual", "start", "end"]
+    assert cbar["y"] == "feed [mm/s]"
+
+
+def test_sim_run_plots(sim, tmp_path):
+    """`lissom-sim run --plots --json`: the five PNGs in the run directory, and stdout is only the summary."""
+    root = os.path.dirname(HIL)
+    prog = os.path.join(root, "host_sim", "examples", "circle_chords.ngc")
+    machine = os.path.join(root, "host_sim", "machines", "router.json")
+    out = sim("run", prog, "--machine", machine, "--out", tmp_path / "run", "--json", "--plots")
+    assert out["within_limits"] is True  # parsed as JSON: nothing else on stdout
+    names = sorted(p.name for p in (tmp_path / "run").glob("*.png"))
+    assert names == ["run_accel.png", "run_error.png", "run_feed.png", "run_jerk.png", "run_path.png"]
+    for p in (tmp_path / "run").glob("*.png"):
+        check_png(str(p))

@@ -5,10 +5,14 @@ limits checked independently of the C code from the CSV files the run writes:
   1e-6 relative of the machine file's limits;
 - the path deviation: the distance of every setpoint to the programmed path (sampled every 0.5 um from a small
   G-code reader of its own, matched in order along the path) within the program's G64 P tolerance;
-- the run ends exactly on the program's last point, at rest;
+- the run ends exactly on the program's last point, at rest: held there for three more cycles, the stop is within
+  the limits too;
 - run.csv holds setpoints, actual positions, following error, feed and V/A/J per axis, consistent with setpoints.csv;
 - the summary JSON and the numbers printed by --json agree.
+Every program in host_sim/examples has a case here, and every program also runs on each other shipped XYZ machine
+with its limits and end checked from the setpoints.
 """
+import glob
 import csv
 import json
 import math
@@ -35,8 +39,9 @@ SAMPLE_MM = 0.0005
 REL = 1e-6
 
 
-def read_program(path):
-    """The example programs' subset: G0-G3 (G17, I J or R), X Y Z, G64 P. Returns (sampled points, last point, P)."""
+def read_program(path, sample=True):
+    """The example programs' subset: G0-G3 (G17, I J or R), X Y Z, G64 P. Returns (sampled points, last point, P);
+    without `sample`, no points (only the end and P)."""
     pos = np.zeros(3)
     mode = 0
     tol = None
@@ -61,7 +66,9 @@ def read_program(path):
         for i, k in enumerate("XYZ"):
             if k in vals:
                 end[i] = vals[k]
-        if mode in (0, 1):
+        if not sample:
+            pass
+        elif mode in (0, 1):
             n = max(2, int(math.ceil(np.linalg.norm(end - pos) / SAMPLE_MM)) + 1)
             pts.extend(pos + (end - pos) * t for t in np.linspace(0, 1, n)[1:])
         else:
@@ -108,6 +115,35 @@ def path_deviation(pts, xyz, step_max_mm):
         i0 = lo + k
         dev = max(dev, math.sqrt(d[k]))
     return dev
+
+
+def test_every_example_is_run():
+    progs = sorted(os.path.basename(p) for p in glob.glob(os.path.join(EXAMPLES, "*.ngc")))
+    assert progs and progs == sorted(c[0] for c in CASES)
+
+
+def run_csv_header(names):
+    """The run.csv columns of docs/host_sim.md, in the order lissom-sim writes them (linear axes, with drives)."""
+    head = ["t_s", "feed_mm_s", "block"]
+    for a in names:
+        head += [f"{a}_set_mm", f"{a}_act_mm", f"{a}_err_mm", f"{a}_v_mm_s", f"{a}_a_mm_s2", f"{a}_j_mm_s3"]
+    return head
+
+
+def check_limits_and_end(data, limits, cycle_s, last):
+    """Per-axis v, a, j by backward differences with the machine at rest before the first setpoint and held on the
+    last one for three more cycles (so the stop counts too); the last setpoint is exactly the programmed end."""
+    q = np.vstack([np.zeros((3, len(limits))), data[:, 1:], np.repeat(data[-1:, 1:], 3, axis=0)])
+    v = np.diff(q, axis=0) / cycle_s
+    a = np.diff(q, 2, axis=0) / cycle_s**2
+    jj = np.diff(q, 3, axis=0) / cycle_s**3
+    for i, name in enumerate(limits):
+        vmax, amax, jmax = limits[name]
+        mv, ma, mj = np.abs(v[:, i]).max(), np.abs(a[:, i]).max(), np.abs(jj[:, i]).max()
+        assert mv <= vmax * (1 + REL), f"{name} v {mv} > {vmax}"
+        assert ma <= amax * (1 + REL), f"{name} a {ma} > {amax}"
+        assert mj <= jmax * (1 + REL), f"{name} j {mj} > {jmax}"
+    assert np.array_equal(data[-1, 1:4], last), f"ends at {data[-1, 1:4]}, program ends at {last}"
 
 
 def machine_limits(path):
@@ -161,14 +197,15 @@ def test_example_runs_within_limits(sim, tmp_path, prog, machine):
     assert j["max_deviation"] <= tol * (1 + 1e-9)
     assert j["max_deviation"] == pytest.approx(dev, abs=SAMPLE_MM)
 
-    # exact end, at rest
-    assert np.array_equal(q[-1, :3], last), f"ends at {q[-1, :3]}, program ends at {last}"
+    # exact end, at rest (the stop within the limits too)
+    check_limits_and_end(data, limits, cycle_s, last)
     assert j["end_error"] == 0
 
     # run.csv: setpoints, actual positions, following error, feed, V A J per axis
     with open(out / "run.csv", encoding="utf-8") as f:
         r = list(csv.DictReader(f))
     assert len(r) == n
+    assert list(r[0]) == run_csv_header(list(limits))  # the schema of docs/host_sim.md, exactly
     for i, name in enumerate(limits):
         for col in ("set_mm", "act_mm", "err_mm", "v_mm_s", "a_mm_s2", "j_mm_s3"):
             assert f"{name}_{col}" in r[0], f"run.csv lacks {name}_{col}"
@@ -179,5 +216,30 @@ def test_example_runs_within_limits(sim, tmp_path, prog, machine):
         assert np.allclose(err, s - act, rtol=0, atol=1e-6)
         jv = np.array([float(x[f"{name}_j_mm_s3"]) for x in r])
         assert np.allclose(jv, jj[:, i], rtol=1e-5, atol=1e-3 * limits[name][2])
+        vv = np.array([float(x[f"{name}_v_mm_s"]) for x in r])
+        av = np.array([float(x[f"{name}_a_mm_s2"]) for x in r])
+        assert np.allclose(vv, v[2:, i], rtol=1e-6, atol=1e-6 * limits[name][0])
+        assert np.allclose(av, a[1:, i], rtol=1e-6, atol=1e-5 * limits[name][1])
+        t_csv = np.array([float(x["t_s"]) for x in r])
+        assert np.allclose(t_csv, t, rtol=0, atol=1e-9)
     feed = np.array([float(x["feed_mm_s"]) for x in r])
     assert feed.min() >= -1e-9 and feed[-1] == pytest.approx(0, abs=1e-9)
+
+
+OTHER = [(prog, m) for prog, _ in CASES for m in ("router.json", "kombarov_table1.json", "beudaert_table1.json")
+         if (prog, m) not in CASES]
+
+
+@pytest.mark.parametrize("prog,machine", OTHER, ids=["%s-%s" % (p.split(".")[0], m.split(".")[0]) for p, m in OTHER])
+def test_example_on_other_machines(sim, tmp_path, prog, machine):
+    out = tmp_path / "run"
+    mpath = os.path.join(MACHINES, machine)
+    j = sim("run", os.path.join(EXAMPLES, prog), "--machine", mpath, "--out", out, "--json", "--no-drive")
+    limits, cycle_s = machine_limits(mpath)
+    with open(out / "setpoints.csv", encoding="utf-8") as f:
+        rows = list(csv.reader(f))
+    data = np.array(rows[1:], dtype=float)
+    _, last, tol = read_program(os.path.join(EXAMPLES, prog), sample=False)
+    check_limits_and_end(data, limits, cycle_s, last)
+    assert j["within_limits"] is True and j["end_error"] == 0
+    assert j["max_deviation"] <= tol * (1 + 1e-9)

@@ -23,6 +23,9 @@
 #define W_BISECT 14
 #define VC_BISECT 12
 #define STAIR_LEVELS 6
+/* Searches over a speed stop when the bracket is this narrow (relative): W and cruise feeds a fraction of a percent
+ * below the best cost a fraction of a percent of time, and every candidate is verified in full anyway. */
+#define SPEED_RES LSM_R(0.004)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* storage                                                                                                       */
@@ -1086,8 +1089,27 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
         if (n == 0)
             continue;
         const lsm_real T = (lsm_real)n * dt;
-        const int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
+        int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
         lsm_kin prev = st, cur;
+        if (Q > 1) {
+            /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
+             * end values, and they bound those of every part): where that holds, so do the parts; the finer
+             * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
+            lsm_kin e;
+            lsm_phase_end(&ph[p], dt, &st, &e);
+            rcheck whole = *res;
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, lsm_max2(st.v_mm_s, e.v_mm_s),
+                       lsm_max2(lsm_fabs(st.a_mm_s2), lsm_fabs(e.a_mm_s2)),
+                       lsm_max2(lsm_fabs(st.j_mm_s3), lsm_fabs(e.j_mm_s3)), ph[p].shape == LSM_PHASE_CONST ? R0 : sn,
+                       &whole);
+            if (!whole.vviol && whole.ra >= R1 && whole.rj >= R1 && whole.rs >= R1) {
+                res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
+                res->rj = lsm_min2(res->rj, whole.rj);
+                res->rs = lsm_min2(res->rs, whole.rs);
+                st = e;
+                continue;
+            }
+        }
         for (int q = 1; q <= Q; q++) {
             const int k8 = q * (8 / Q);
             if (q == Q)
@@ -1126,16 +1148,30 @@ static lsm_real ramp_pos_at_speed(const ramp *r, lsm_real dt, lsm_real c)
         lsm_phase_end(&ph[p], dt, &st, &e);
         const bool crosses = up ? (e.v_mm_s >= c) : (e.v_mm_s <= c);
         if (crosses) {
+            /* v is monotone in the phase and its derivative a is known: Newton steps kept inside the bracket
+             * [lo, hi] (bisection when a step would leave it) until a step is far below a cycle; the answer is
+             * taken on the side where the speed has been reached (hi), as the bisection it replaces did */
             lsm_real lo = R0, hi = (lsm_real)ph[p].n_cycles * dt;
-            for (int it = 0; it < 48; it++) {
-                const lsm_real mid = (lo + hi) / LSM_R(2.0);
+            const lsm_real tol = LSM_R(1e-7) * dt;
+            const lsm_real dv_ph = e.v_mm_s - st.v_mm_s;
+            lsm_real t = dv_ph != R0 ? hi * (c - st.v_mm_s) / dv_ph : hi;
+            for (int it = 0; it < 24 && hi - lo > tol; it++) {
+                if (!(t > lo && t < hi))
+                    t = (lo + hi) / LSM_R(2.0);
                 lsm_kin m;
-                lsm_phase_advance(&ph[p], dt, &st, mid, &m);
+                lsm_phase_advance(&ph[p], dt, &st, t, &m);
                 const bool past = up ? (m.v_mm_s >= c) : (m.v_mm_s <= c);
                 if (past)
-                    hi = mid;
+                    hi = t;
                 else
-                    lo = mid;
+                    lo = t;
+                const lsm_real step = m.a_mm_s2 != R0 ? (c - m.v_mm_s) / m.a_mm_s2 : hi - lo;
+                if (lsm_fabs(step) < tol) {
+                    if (!past)
+                        hi = lsm_min2(hi, t + tol); /* (v moves by a tol there: reached within rounding) */
+                    break;
+                }
+                t += step;
             }
             lsm_kin m;
             lsm_phase_advance(&ph[p], dt, &st, hi, &m);
@@ -1363,6 +1399,62 @@ static bool fit_decel_now(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_r
 /* ------------------------------------------------------------------------------------------------------------ */
 /* backward pass                                                                                                 */
 
+/* Time of one continuous sin² velocity change by dv with the tangential limits a, j, s (Kombarov eqs 25-31, before
+ * quantisation: the whole-cycle profile of the strict rule takes a few cycles more). */
+static lsm_real ramp_time_cont(lsm_real dv, lsm_real a, lsm_real j, lsm_real s)
+{
+    if (!(dv > R0))
+        return R0;
+    lsm_real t1 = PI_R * j / (LSM_R(2.0) * s);                          /* eq 25 */
+    t1 = lsm_min2(t1, lsm_sqrt(PI_R * a / (LSM_R(2.0) * s)));          /* eq 26 */
+    t1 = lsm_min2(t1, lsm_cbrt(PI_R * dv / (LSM_R(4.0) * s)));         /* eq 29 */
+    const lsm_real jc = LSM_R(2.0) * t1 * s / PI_R;                    /* eq 32 */
+    const lsm_real t2 = lsm_max2(lsm_min2(a / jc - t1, lsm_sqrt(t1 * t1 / LSM_R(4.0) + dv / jc) - LSM_R(1.5) * t1), R0);
+    const lsm_real ap = jc * (t1 + t2);                                /* eq 23 */
+    const lsm_real t4 = lsm_max2(dv / ap - LSM_R(2.0) * t1 - t2, R0);  /* eq 31 */
+    return LSM_R(4.0) * t1 + LSM_R(2.0) * t2 + t4;
+}
+
+/* Highest speed v in [w, vmax] from which one continuous ramp to w (or from w up to v) fits in distance D:
+ * (v + w) t(v - w) / 2 <= D, the travel being monotone in v. A first probe for the searches below. */
+static lsm_real speed_for_dist(lsm_real w, lsm_real D, lsm_real a, lsm_real j, lsm_real s, lsm_real vmax)
+{
+    if (!(vmax > w) || !(D > R0))
+        return w;
+    if ((vmax + w) * ramp_time_cont(vmax - w, a, j, s) <= LSM_R(2.0) * D)
+        return vmax;
+    lsm_real lo = w, hi = vmax;
+    for (int it = 0; it < 40 && hi - lo > SPEED_RES * LSM_R(0.25) * hi; it++) {
+        const lsm_real mid = (lo + hi) / LSM_R(2.0);
+        if ((mid + w) * ramp_time_cont(mid - w, a, j, s) <= LSM_R(2.0) * D)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Highest cruise vc in [max(v0, v1), vmax] for which two continuous ramps v0 -> vc -> v1 fit in distance D. */
+static lsm_real cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a, lsm_real j, lsm_real s,
+                                lsm_real vmax)
+{
+    lsm_real lo = lsm_max2(v0, v1), hi = vmax;
+    if (!(hi > lo) || !(D > R0))
+        return lo;
+    for (int it = 0; it < 40 && hi - lo > SPEED_RES * LSM_R(0.25) * hi; it++) {
+        const lsm_real mid = it == 0 ? hi : (lo + hi) / LSM_R(2.0);
+        const lsm_real d = (v0 + mid) * ramp_time_cont(mid - v0, a, j, s) + (mid + v1) * ramp_time_cont(mid - v1, a, j, s);
+        if (d <= LSM_R(2.0) * D) {
+            if (it == 0)
+                return hi;
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
 /* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact). */
 static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w1, bool exact)
 {
@@ -1382,8 +1474,17 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     lsm_real xs;
     if (hi <= w1 ? region_ok(&pc, R0, D, hi) : fit_decel(&pc, R0, D, hi, w1, exact, true, &r, &xs))
         return hi;
-    for (int it = 0; it < W_BISECT; it++) {
-        const lsm_real mid = (lo + hi) / LSM_R(2.0);
+    /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
+     * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
+    lsm_real ga, gj, gs;
+    guess_limits(&pc, D, &ga, &gj, &gs);
+    lsm_real probe = speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
+    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+        lsm_real mid = (lo + hi) / LSM_R(2.0);
+        if (probe > lo && probe < hi) {
+            mid = probe;
+            probe = R0;
+        }
         const bool ok = mid <= w1 ? region_ok(&pc, R0, D, mid) : fit_decel(&pc, R0, D, mid, w1, exact, true, &r, &xs);
         if (ok)
             lo = mid;
@@ -1507,14 +1608,18 @@ static void backward_pass(lsm_planner *pl)
         } else {
             found = vstep(&vs, k, eroded_cap(pl, k), h, drop, &node);
         }
-        if (!found) {
-            b->flags &= (uint8_t)~LSM_PB_NODE;
-            continue;
-        }
+        if (!found)
+            continue; /* (its node flag is settled when the node before it is found: a block may turn out to be the
+                         valley once the walk has gone past it, and its old flag tells whether its W changed) */
         /* a node at `node` (node >= k) */
         lsm_pblock *nb = blk(pl, node);
-        const lsm_real w = (nb->flags & LSM_PB_STOP) ? R0 : node_w(pl, node, n_id, n_w, n_exact);
-        const bool same = (nb->flags & LSM_PB_NODE) && nb->w_mm_s == w && !pl->full_pass;
+        lsm_real w = (nb->flags & LSM_PB_STOP) ? R0 : node_w(pl, node, n_id, n_w, n_exact);
+        /* unchanged, or higher by less than the searches resolve: the old W stays (a W only rises when blocks are
+         * appended behind it, and a lower one is still certified), and so does everything before it */
+        const bool was = (nb->flags & LSM_PB_NODE) != 0 && !pl->full_pass;
+        const bool same = was && (nb->w_mm_s == w || (w > nb->w_mm_s && w <= nb->w_mm_s * (R1 + SPEED_RES)));
+        if (same)
+            w = nb->w_mm_s;
         nb->flags |= LSM_PB_NODE;
         nb->w_mm_s = w;
         for (uint32_t q = node + 1u; q != n_id; q++) /* blocks inside the piece are not nodes */
@@ -1804,6 +1909,12 @@ static void staircase(pctx *pc, plan5 *best)
     const lsm_real v0 = best->v0, vmax = best->vc;
     if (!(vmax > v0 * LSM_R(1.2) + LSM_R(1e-6)) || best->xB < best->xA + best->A.dist)
         return;
+    /* a ramp A that starts at once with (nearly) the limits of its first block at rest was not slowed: no lower
+     * step can reach the cruise sooner */
+    lsm_real na, nj, ns;
+    guess_limits(pc, R0, &na, &nj, &ns);
+    if (!(best->xA > R0) && best->A.a_lim >= LSM_R(0.9) * na && best->A.j_lim >= LSM_R(0.9) * nj)
+        return;
     const bool exact = !(best->v1 > R0);
     const lsm_real xe = best->xA + best->A.dist;
     lsm_real gain = R0;
@@ -1915,11 +2026,18 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
             pc.floor = v0;
         v1 = w1;
         /* forward step: what one ramp from v0 reaches (then cruise) */
+        lsm_real ga, gj, gs; /* budgets at the start (at rest): the distance probes below */
+        guess_limits(&pc, R0, &ga, &gj, &gs);
         if (v1 > v0 && !catchup) {
             if (!feas5(&pc, v0, v1, v1, false, false, &p)) {
                 lsm_real lo = v0, hi = v1;
-                for (int it = 0; it < W_BISECT; it++) {
-                    const lsm_real mid = (lo + hi) / LSM_R(2.0);
+                lsm_real probe = speed_for_dist(v0, pc.D, ga, gj, gs, v1);
+                for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+                    lsm_real mid = (lo + hi) / LSM_R(2.0);
+                    if (probe > lo && probe < hi) {
+                        mid = probe;
+                        probe = R0;
+                    }
                     if (feas5(&pc, v0, mid, mid, false, false, &p))
                         lo = mid;
                     else
@@ -1948,7 +2066,7 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
         } else if (v0 > v1) {
             /* caps below v0 inside the piece (dips that are not nodes): slow down at once to a cruise below them */
             lsm_real l = v1, u = v0;
-            for (int it = 0; it < VC_BISECT + 8; it++) {
+            for (int it = 0; it < VC_BISECT + 8 && u - l > SPEED_RES * u; it++) {
                 const lsm_real mid = (l + u) / LSM_R(2.0);
                 if (mid > R0 && feas5(&pc, v0, mid, v1, exact, true, &p)) {
                     best = p;
@@ -1969,8 +2087,13 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
                 have = true;
             } else {
                 lsm_real l = lo, u = hi;
-                for (int it = 0; it < VC_BISECT + (have ? 0 : 20); it++) {
-                    const lsm_real mid = (l + u) / LSM_R(2.0);
+                lsm_real probe = cruise_for_dist(v0, v1, pc.D, ga, gj, gs, hi);
+                for (int it = 0; it < VC_BISECT + (have ? 0 : 20) && u - l > SPEED_RES * u; it++) {
+                    lsm_real mid = (l + u) / LSM_R(2.0);
+                    if (probe > l && probe < u) {
+                        mid = probe;
+                        probe = R0;
+                    }
                     if (feas5(&pc, v0, mid, v1, exact, false, &p)) {
                         best = p;
                         have = true;

@@ -136,6 +136,8 @@ bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s,
             if (k > n2_hi - n2_lo && n2_lo == 0)
                 break;
             const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
+            if (found && 4ull * n1 + 2ull * n2 > best_total)
+                continue; /* longer than the best even with n4 = 0 (ties still compete on the jerk) */
             uint32_t n4;
             if (!min_n4(lim, cycle_s, dv_mm_s, n1, n2, &n4))
                 continue;

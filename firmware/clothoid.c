@@ -43,6 +43,50 @@ static void cl_cinv(lsm_real br, lsm_real bi, lsm_real *rr, lsm_real *ri)
     }
 }
 
+/* sin and cos of x. Float: the reduction and the polynomials of lsm_math_sinf / lsm_math_cosf (lsm_math.c), done
+ * once for both, so the results are the same bits as theirs; double: the C library. */
+#if LSM_REAL_IS_FLOAT
+static void cl_sincos(float x, float *s_out, float *c_out)
+{
+    if (x != x || x > 3.0e38f || x < -3.0e38f) {
+        *s_out = *c_out = x - x;
+        return;
+    }
+    const float kf = x * 0.636619772367581f;
+    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
+    const unsigned quadrant = (unsigned)(int32_t)k & 3u;
+    const float r = ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
+    const float z = r * r;
+    const float sp = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+    const float cp =
+        ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+    switch (quadrant) {
+    case 0:
+        *s_out = sp;
+        *c_out = cp;
+        break;
+    case 1:
+        *s_out = cp;
+        *c_out = -sp;
+        break;
+    case 2:
+        *s_out = -sp;
+        *c_out = -cp;
+        break;
+    default:
+        *s_out = -cp;
+        *c_out = sp;
+        break;
+    }
+}
+#else
+static void cl_sincos(double x, double *s_out, double *c_out)
+{
+    *s_out = sin(x);
+    *c_out = cos(x);
+}
+#endif
+
 /* ---------------------------------------------------------------- Taylor kernel */
 
 /* Stopping tolerance for a piece with psi(u) = a u + b u^2/2: the imaginary parts are about
@@ -108,7 +152,8 @@ static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom
     if (ph > LSM_R(1.0))
         m = (int)lsm_ceil(ph);
     const lsm_real h = s / (lsm_real)m;
-    lsm_real rr = lsm_cos(th0), ri = lsm_sin(th0);
+    lsm_real rr, ri;
+    cl_sincos(th0, &ri, &rr);
     for (int j = 0; j < 3; j++)
         mr[j] = mi[j] = LSM_R(0.0);
     lsm_clothoid_series se;
@@ -221,8 +266,7 @@ static void cl_phase_x2(lsm_real x, lsm_real *co, lsm_real *si)
     if (r > LSM_R(2.0))
         r -= LSM_R(4.0);
     const lsm_real ang = CL_PI * LSM_R(0.5) * r;
-    *co = lsm_cos(ang);
-    *si = lsm_sin(ang);
+    cl_sincos(ang, si, co);
 }
 
 void lsm_clothoid_fresnel(lsm_real x, lsm_real *c, lsm_real *s)
@@ -269,7 +313,8 @@ static void cl_fresnel_end(lsm_real u, lsm_real th, lsm_real *ar, lsm_real *ai, 
     } else {
         lsm_real gr, gi;
         cl_fresnel_aux(au, &gr, &gi);
-        const lsm_real co = lsm_cos(th), si = lsm_sin(th);
+        lsm_real co, si;
+        cl_sincos(th, &si, &co);
         *ar = sg * LSM_R(0.5);
         *ai = sg * LSM_R(0.5);
         *br = -sg * (gr * co - gi * si);
@@ -330,7 +375,8 @@ static void cl_integral_fresnel(lsm_real th0, lsm_real k0, lsm_real c, lsm_real 
     const lsm_real dar = a1r - a0r, dai = a1i - a0i;
     if (dar != LSM_R(0.0) || dai != LSM_R(0.0)) {
         const lsm_real thv = cl_vertex_phase(th0, k0, c);
-        const lsm_real co = lsm_cos(thv), si = lsm_sin(thv);
+        lsm_real co, si;
+        cl_sincos(thv, &si, &co);
         rr += co * dar - si * dai;
         ri += co * dai + si * dar;
     }
@@ -355,9 +401,10 @@ void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, ls
     if (c == LSM_R(0.0)) {
         const lsm_real h = LSM_R(0.5) * k0 * s;
         const lsm_real sinc = h == LSM_R(0.0) ? LSM_R(1.0) : lsm_sin(h) / h;
-        const lsm_real a = th0 + h;
-        *dx = s * sinc * lsm_cos(a);
-        *dy = s * sinc * lsm_sin(a);
+        lsm_real co, si;
+        cl_sincos(th0 + h, &si, &co);
+        *dx = s * sinc * co;
+        *dy = s * sinc * si;
         return;
     }
     const lsm_real phi = lsm_fabs(k0) * s + LSM_R(0.5) * lsm_fabs(c) * s * s;
@@ -385,19 +432,30 @@ static lsm_status cl_check(lsm_real v)
     return (lsm_status)lsm_check_finite(v);
 }
 
+/* Validation of the six parameters of a segment: one test for the common case (x - x is 0 for every finite x and
+ * NaN otherwise, so the sum is 0 only if all six are finite), the checks one by one to report the first bad one. */
+static lsm_status cl_check_seg(lsm_real x0, lsm_real y0, lsm_real th0, lsm_real k0, lsm_real c, lsm_real len)
+{
+    const lsm_real z = ((x0 - x0) + (y0 - y0)) + ((th0 - th0) + (k0 - k0)) + ((c - c) + (len - len));
+    if (!(z == LSM_R(0.0))) {
+        const lsm_real v[6] = {x0, y0, th0, k0, c, len};
+        for (int i = 0; i < 6; i++) {
+            lsm_status st = cl_check(v[i]);
+            if (st != LSM_OK)
+                return st;
+        }
+    }
+    return len < LSM_R(0.0) ? LSM_E_RANGE : LSM_OK;
+}
+
 lsm_status lsm_clothoid_init(lsm_clothoid *cl, lsm_real x0_mm, lsm_real y0_mm, lsm_real theta0_rad,
                              lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real len_mm)
 {
     if (cl == NULL)
         return LSM_E_NULL;
-    const lsm_real v[6] = {x0_mm, y0_mm, theta0_rad, kappa0_per_mm, c_per_mm2, len_mm};
-    for (int i = 0; i < 6; i++) {
-        lsm_status st = cl_check(v[i]);
-        if (st != LSM_OK)
-            return st;
-    }
-    if (len_mm < LSM_R(0.0))
-        return LSM_E_RANGE;
+    lsm_status st = cl_check_seg(x0_mm, y0_mm, theta0_rad, kappa0_per_mm, c_per_mm2, len_mm);
+    if (st != LSM_OK)
+        return st;
     cl->x0_mm = x0_mm;
     cl->y0_mm = y0_mm;
     cl->theta0_rad = theta0_rad;
@@ -439,8 +497,7 @@ static void cl_anchor(lsm_clothoid_stepper *st)
     cl_state(&st->seg, st->s_mm, &s);
     st->x_mm = s.x_mm;
     st->y_mm = s.y_mm;
-    st->tx = lsm_cos(s.theta_rad);
-    st->ty = lsm_sin(s.theta_rad);
+    cl_sincos(s.theta_rad, &st->ty, &st->tx);
     st->kappa_per_mm = s.kappa_per_mm;
     st->cx_mm = st->cy_mm = LSM_R(0.0);
     st->since_anchor = 0;
@@ -451,9 +508,8 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
 {
     if (st == NULL || seg == NULL)
         return LSM_E_NULL;
-    lsm_clothoid tmp;
-    lsm_status r = lsm_clothoid_init(&tmp, seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm,
-                                     seg->c_per_mm2, seg->len_mm);
+    lsm_status r = cl_check_seg(seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm, seg->c_per_mm2,
+                                seg->len_mm);
     if (r != LSM_OK)
         return r;
     r = cl_check(s0_mm);
@@ -461,7 +517,7 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
         return r;
     if (s0_mm < LSM_R(0.0) || s0_mm > seg->len_mm)
         return LSM_E_RANGE;
-    st->seg = tmp;
+    st->seg = *seg;
     st->s_mm = s0_mm;
     st->cs_mm = LSM_R(0.0);
     st->anchor_every = anchor_every;
@@ -593,7 +649,9 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
         const lsm_real th = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
         /* dP/dc = int (t^2 / 2) i e^{i theta} dt = (i M2) / 2 */
         J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]);   /* dF1/dc */
-        J[1] = f->nx * lsm_cos(th) + f->ny * lsm_sin(th);       /* dF1/ds */
+        lsm_real co, si;
+        cl_sincos(th, &si, &co);
+        J[1] = f->nx * co + f->ny * si;                         /* dF1/ds */
         J[2] = LSM_R(0.5) * s * s;                              /* dF2/dc */
         J[3] = f->k0 + c * s;                                   /* dF2/ds */
     }
@@ -638,7 +696,9 @@ lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, 
 
     if (lsm_fabs(f.d0) <= d_err) {
         /* on the line: the only solution is s = 0, if the tangent is already along the normal */
-        const lsm_real cr = f.nx * lsm_sin(f.th0) - f.ny * lsm_cos(f.th0);
+        lsm_real co, si;
+        cl_sincos(f.th0, &si, &co);
+        const lsm_real cr = f.nx * si - f.ny * co;
         if (lsm_fabs(cr) <= LSM_R(16.0) * LSM_REAL_EPS) {
             out->c_per_mm2 = LSM_R(0.0);
             out->s_mm = LSM_R(0.0);

@@ -43,6 +43,43 @@ static void cl_cinv(lsm_real br, lsm_real bi, lsm_real *rr, lsm_real *ri)
     }
 }
 
+/* sin and cos of x. Float: the reduction and the polynomials of lsm_math_sinf / lsm_math_cosf (lsm_math.c), done
+ * once for both, so the results are the same bits as theirs; double: the C library. */
+#if LSM_REAL_IS_FLOAT
+static void cl_sincos(float x, float *s_out, float *c_out)
+{
+    if (x != x || x > 3.0e38f || x < -3.0e38f) {
+        *s_out = *c_out = x - x;
+        return;
+    }
+    const float kf = x * 0.636619772367581f;
+    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
+    const unsigned quadrant = (unsigned)(int32_t)k & 3u;
+    const float r = ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
+    const float z = r * r;
+    const float sp = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+    const float cp =
+        ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+    float sv = sp, cv = cp; /* quadrant 0 */
+    if (quadrant & 1u) {    /* 1: (cp, -sp); 3: (-cp, sp) */
+        sv = cp;
+        cv = -sp;
+    }
+    if (quadrant & 2u) { /* 2: (-sp, -cp) */
+        sv = -sv;
+        cv = -cv;
+    }
+    *s_out = sv;
+    *c_out = cv;
+}
+#else
+static void cl_sincos(double x, double *s_out, double *c_out)
+{
+    *s_out = sin(x);
+    *c_out = cos(x);
+}
+#endif
+
 /* ---------------------------------------------------------------- Taylor kernel */
 
 /* Stopping tolerance for a piece with psi(u) = a u + b u^2/2: the imaginary parts are about
@@ -101,14 +138,16 @@ void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_cl
 
 /* Piecewise series over [0, s] (s > 0): moments int_0^s t^j e^{i theta(t)} dt, j < nmom, in absolute
  * orientation; each piece turns at most 1 rad. Returns the number of pieces. */
-static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3], lsm_real mi[3])
+static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3], lsm_real mi[3],
+                     lsm_real rot[2])
 {
     lsm_real ph = lsm_fabs(k0) * s + lsm_fabs(c) * s * s;
     int m = 1;
     if (ph > LSM_R(1.0))
         m = (int)lsm_ceil(ph);
     const lsm_real h = s / (lsm_real)m;
-    lsm_real rr = lsm_cos(th0), ri = lsm_sin(th0);
+    lsm_real rr, ri;
+    cl_sincos(th0, &ri, &rr);
     for (int j = 0; j < 3; j++)
         mr[j] = mi[j] = LSM_R(0.0);
     lsm_clothoid_series se;
@@ -136,6 +175,10 @@ static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom
         lsm_real nr = rr * se.er - ri * se.ei;
         ri = rr * se.ei + ri * se.er;
         rr = nr;
+    }
+    if (rot != NULL) { /* e^{i theta(s)}: the unit tangent at s */
+        rot[0] = rr;
+        rot[1] = ri;
     }
     return m;
 }
@@ -221,8 +264,7 @@ static void cl_phase_x2(lsm_real x, lsm_real *co, lsm_real *si)
     if (r > LSM_R(2.0))
         r -= LSM_R(4.0);
     const lsm_real ang = CL_PI * LSM_R(0.5) * r;
-    *co = lsm_cos(ang);
-    *si = lsm_sin(ang);
+    cl_sincos(ang, si, co);
 }
 
 void lsm_clothoid_fresnel(lsm_real x, lsm_real *c, lsm_real *s)
@@ -269,7 +311,8 @@ static void cl_fresnel_end(lsm_real u, lsm_real th, lsm_real *ar, lsm_real *ai, 
     } else {
         lsm_real gr, gi;
         cl_fresnel_aux(au, &gr, &gi);
-        const lsm_real co = lsm_cos(th), si = lsm_sin(th);
+        lsm_real co, si;
+        cl_sincos(th, &si, &co);
         *ar = sg * LSM_R(0.5);
         *ai = sg * LSM_R(0.5);
         *br = -sg * (gr * co - gi * si);
@@ -330,13 +373,21 @@ static void cl_integral_fresnel(lsm_real th0, lsm_real k0, lsm_real c, lsm_real 
     const lsm_real dar = a1r - a0r, dai = a1i - a0i;
     if (dar != LSM_R(0.0) || dai != LSM_R(0.0)) {
         const lsm_real thv = cl_vertex_phase(th0, k0, c);
-        const lsm_real co = lsm_cos(thv), si = lsm_sin(thv);
+        lsm_real co, si;
+        cl_sincos(thv, &si, &co);
         rr += co * dar - si * dai;
         ri += co * dai + si * dar;
     }
     const lsm_real f = CL_PI / sq; /* sqrt(pi / c) */
     *dx = f * rr;
     *dy = f * ri;
+}
+
+/* s > 0, c != 0: lsm_clothoid_integral uses the piecewise series (else the Fresnel form). */
+static inline bool cl_series_regime(lsm_real k0, lsm_real c, lsm_real s)
+{
+    const lsm_real phi = lsm_fabs(k0) * s + LSM_R(0.5) * lsm_fabs(c) * s * s;
+    return phi <= (lsm_real)LSM_CLOTHOID_SERIES_PHASE_RAD;
 }
 
 void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy)
@@ -355,15 +406,15 @@ void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, ls
     if (c == LSM_R(0.0)) {
         const lsm_real h = LSM_R(0.5) * k0 * s;
         const lsm_real sinc = h == LSM_R(0.0) ? LSM_R(1.0) : lsm_sin(h) / h;
-        const lsm_real a = th0 + h;
-        *dx = s * sinc * lsm_cos(a);
-        *dy = s * sinc * lsm_sin(a);
+        lsm_real co, si;
+        cl_sincos(th0 + h, &si, &co);
+        *dx = s * sinc * co;
+        *dy = s * sinc * si;
         return;
     }
-    const lsm_real phi = lsm_fabs(k0) * s + LSM_R(0.5) * lsm_fabs(c) * s * s;
-    if (phi <= (lsm_real)LSM_CLOTHOID_SERIES_PHASE_RAD) {
+    if (cl_series_regime(k0, c, s)) {
         lsm_real mr[3], mi[3];
-        cl_pieces(th0, k0, c, s, 1, mr, mi);
+        cl_pieces(th0, k0, c, s, 1, mr, mi, NULL);
         *dx = mr[0];
         *dy = mi[0];
         return;
@@ -385,19 +436,30 @@ static lsm_status cl_check(lsm_real v)
     return (lsm_status)lsm_check_finite(v);
 }
 
+/* Validation of the six parameters of a segment: one test for the common case (x - x is 0 for every finite x and
+ * NaN otherwise, so the sum is 0 only if all six are finite), the checks one by one to report the first bad one. */
+static lsm_status cl_check_seg(lsm_real x0, lsm_real y0, lsm_real th0, lsm_real k0, lsm_real c, lsm_real len)
+{
+    const lsm_real z = ((x0 - x0) + (y0 - y0)) + ((th0 - th0) + (k0 - k0)) + ((c - c) + (len - len));
+    if (!(z == LSM_R(0.0))) {
+        const lsm_real v[6] = {x0, y0, th0, k0, c, len};
+        for (int i = 0; i < 6; i++) {
+            lsm_status st = cl_check(v[i]);
+            if (st != LSM_OK)
+                return st;
+        }
+    }
+    return len < LSM_R(0.0) ? LSM_E_RANGE : LSM_OK;
+}
+
 lsm_status lsm_clothoid_init(lsm_clothoid *cl, lsm_real x0_mm, lsm_real y0_mm, lsm_real theta0_rad,
                              lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real len_mm)
 {
     if (cl == NULL)
         return LSM_E_NULL;
-    const lsm_real v[6] = {x0_mm, y0_mm, theta0_rad, kappa0_per_mm, c_per_mm2, len_mm};
-    for (int i = 0; i < 6; i++) {
-        lsm_status st = cl_check(v[i]);
-        if (st != LSM_OK)
-            return st;
-    }
-    if (len_mm < LSM_R(0.0))
-        return LSM_E_RANGE;
+    lsm_status st = cl_check_seg(x0_mm, y0_mm, theta0_rad, kappa0_per_mm, c_per_mm2, len_mm);
+    if (st != LSM_OK)
+        return st;
     cl->x0_mm = x0_mm;
     cl->y0_mm = y0_mm;
     cl->theta0_rad = theta0_rad;
@@ -407,13 +469,18 @@ lsm_status lsm_clothoid_init(lsm_clothoid *cl, lsm_real x0_mm, lsm_real y0_mm, l
     return LSM_OK;
 }
 
+static inline lsm_real cl_theta(const lsm_clothoid *cl, lsm_real s)
+{
+    return cl->theta0_rad + s * (cl->kappa0_per_mm + LSM_R(0.5) * cl->c_per_mm2 * s);
+}
+
 static void cl_state(const lsm_clothoid *cl, lsm_real s, lsm_clothoid_state *out)
 {
     lsm_real dx, dy;
     lsm_clothoid_integral(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy);
     out->x_mm = cl->x0_mm + dx;
     out->y_mm = cl->y0_mm + dy;
-    out->theta_rad = cl->theta0_rad + s * (cl->kappa0_per_mm + LSM_R(0.5) * cl->c_per_mm2 * s);
+    out->theta_rad = cl_theta(cl, s);
     out->kappa_per_mm = cl->kappa0_per_mm + cl->c_per_mm2 * s;
 }
 
@@ -433,17 +500,171 @@ lsm_status lsm_clothoid_eval(const lsm_clothoid *cl, lsm_real s_mm, lsm_clothoid
 
 /* ---------------------------------------------------------------- stepping */
 
+/* Functions of the stepper's usual path, inlined there (GCC does not inline functions used more than once at -Os);
+ * elsewhere they are called through the plain functions below them. */
+#if defined(__GNUC__)
+#define CL_HOT static inline __attribute__((always_inline))
+#else
+#define CL_HOT static inline
+#endif
+
+/* E = e^{i psi(1)} and M = int_0^1 e^{i psi(u)} du for psi(u) = a u + b u^2 / 2 (lsm_clothoid_local). A
+ * homogeneous aggregate of four reals: returned in registers (s0-s3 on the Cortex-M4F). */
+typedef struct cl_em {
+    lsm_real er, ei, mr, mi;
+} cl_em;
+
+/* The small-step polynomial (lsm_clothoid_local_fast; valid for |a + b/2| <= LSM_CLOTHOID_FAST_PHI_RAD and
+ * |b| <= LSM_CLOTHOID_FAST_B_RAD). Expanded about the midpoint u = 1/2, where psi(u) = phi/2 - r + phi v +
+ * 2 r v^2 (v = u - 1/2 in [-1/2, 1/2], phi = a + b/2 = psi'(1/2), r = b/4):
+ *   E = H^2 with H = e^{i phi/2},   M = H G,   G = int_{-1/2}^{1/2} e^{i (phi v + r (4 v^2 - 1))} dv,
+ *   G = sum_{k,m} (-i r)^k (-q)^m / ((2m)! (2m+1)(2m+3)...(2m+2k+1)),   q = phi^2 / 4
+ * (the odd powers of v integrate to 0, and v^2 <= 1/4: the terms fall like q^m and r^k, not phi^n and b^k).
+ * Kept: sin(phi/2) to x^5 and cos(phi/2) to x^6; G to q^3, r^2 q and r^3. The largest dropped terms are
+ * x^7/5040 (in E), q^4/362880, r^4/945, r^3 q/1890 and r^2 q^2/7560: at the corners of the region the truncation
+ * error is 5.1e-9 in float (eps/23) and 4.9e-18 in double (eps/45), against mpmath (docs/clothoid.md). */
+#define CL_1_OVER(n) (LSM_R(1.0) / LSM_R(n))
+CL_HOT cl_em cl_local_poly_hot(lsm_real a, lsm_real b)
+{
+    const lsm_real x = LSM_R(0.5) * (a + LSM_R(0.5) * b); /* phi / 2 */
+    const lsm_real q = x * x;
+    const lsm_real r = LSM_R(0.25) * b, r2 = r * r;
+    /* H = e^{i x} */
+    const lsm_real hs = x + x * q * (q * CL_1_OVER(120.0) - CL_1_OVER(6.0));
+    const lsm_real hc = LSM_R(1.0) + q * (q * (CL_1_OVER(24.0) - q * CL_1_OVER(720.0)) - LSM_R(0.5));
+    /* G */
+    const lsm_real gr = LSM_R(1.0) - (q * (CL_1_OVER(6.0) - q * (CL_1_OVER(120.0) - q * CL_1_OVER(5040.0))) +
+                                      r2 * (CL_1_OVER(15.0) - q * CL_1_OVER(210.0)));
+    const lsm_real gi = -r * (CL_1_OVER(3.0) - q * (CL_1_OVER(30.0) - q * CL_1_OVER(840.0)) - r2 * CL_1_OVER(105.0));
+    cl_em o;
+    o.er = (hc - hs) * (hc + hs);
+    o.ei = LSM_R(2.0) * hc * hs;
+    o.mr = hc * gr - hs * gi;
+    o.mi = hc * gi + hs * gr;
+    return o;
+}
+
+CL_HOT bool cl_local_is_small(lsm_real a, lsm_real b)
+{
+    return lsm_fabs(a + LSM_R(0.5) * b) <= (lsm_real)LSM_CLOTHOID_FAST_PHI_RAD &&
+           lsm_fabs(b) <= (lsm_real)LSM_CLOTHOID_FAST_B_RAD;
+}
+
+static cl_em cl_local_poly(lsm_real a, lsm_real b)
+{
+    return cl_local_poly_hot(a, b);
+}
+
+static cl_em cl_local_any(lsm_real a, lsm_real b)
+{
+    cl_em o;
+    if (cl_local_is_small(a, b))
+        return cl_local_poly(a, b);
+    lsm_clothoid_local(a, b, &o.er, &o.ei, &o.mr, &o.mi);
+    return o;
+}
+
+void lsm_clothoid_local_fast(lsm_real a, lsm_real b, lsm_real *er, lsm_real *ei, lsm_real *mr, lsm_real *mi)
+{
+    const cl_em o = cl_local_any(a, b);
+    *er = o.er;
+    *ei = o.ei;
+    *mr = o.mr;
+    *mi = o.mi;
+}
+
+/* Applies a sub-step of length h with (E, M) to the state: position += h T M (compensated), T = T E (renormalised
+ * with one Newton step towards |T| = 1). */
+CL_HOT void cl_apply_hot(lsm_clothoid_stepper *st, lsm_real h, cl_em em)
+{
+    const lsm_real tx = st->tx, ty = st->ty;
+    /* compensated sums: the increments are small against the coordinates */
+    const lsm_real ix = h * (tx * em.mr - ty * em.mi) - st->cx_mm, iy = h * (tx * em.mi + ty * em.mr) - st->cy_mm;
+    const lsm_real x = st->x_mm, y = st->y_mm;
+    const lsm_real nxp = x + ix, nyp = y + iy;
+    st->cx_mm = (nxp - x) - ix;
+    st->cy_mm = (nyp - y) - iy;
+    st->x_mm = nxp;
+    st->y_mm = nyp;
+    const lsm_real nx = tx * em.er - ty * em.ei, ny = tx * em.ei + ty * em.er;
+    const lsm_real f = LSM_R(1.5) - LSM_R(0.5) * (nx * nx + ny * ny); /* one Newton step towards |t| = 1 */
+    st->tx = nx * f;
+    st->ty = ny * f;
+}
+
+static void cl_apply(lsm_clothoid_stepper *st, lsm_real h, cl_em em)
+{
+    cl_apply_hot(st, h, em);
+}
+
+/* Exact state at st->s_mm: x and y as lsm_clothoid_eval computes them (bit for bit, so that the end of the segment
+ * is landed on exactly), the tangent from the same series (its end rotation) where that is used, else from the
+ * angle. */
 static void cl_anchor(lsm_clothoid_stepper *st)
 {
-    lsm_clothoid_state s;
-    cl_state(&st->seg, st->s_mm, &s);
-    st->x_mm = s.x_mm;
-    st->y_mm = s.y_mm;
-    st->tx = lsm_cos(s.theta_rad);
-    st->ty = lsm_sin(s.theta_rad);
-    st->kappa_per_mm = s.kappa_per_mm;
+    const lsm_clothoid *cl = &st->seg;
+    const lsm_real s = st->s_mm;
+    lsm_real dx, dy, rot[2];
+    if (s > LSM_R(0.0) && cl->c_per_mm2 != LSM_R(0.0) && cl_series_regime(cl->kappa0_per_mm, cl->c_per_mm2, s)) {
+        lsm_real mr[3], mi[3];
+        cl_pieces(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, 1, mr, mi, rot);
+        dx = mr[0];
+        dy = mi[0];
+    } else {
+        lsm_clothoid_integral(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy);
+        cl_sincos(cl_theta(cl, s), &rot[1], &rot[0]);
+    }
+    st->x_mm = cl->x0_mm + dx;
+    st->y_mm = cl->y0_mm + dy;
+    st->tx = rot[0];
+    st->ty = rot[1];
+    st->kappa_per_mm = cl->kappa0_per_mm + cl->c_per_mm2 * s;
     st->cx_mm = st->cy_mm = LSM_R(0.0);
     st->since_anchor = 0;
+}
+
+/* Most polynomial pieces of an anchor from the segment's start; beyond, the exact evaluation. Float: an anchor
+ * from m pieces costs about 100 m instructions, the exact evaluation about 850 per radian of turning, and the
+ * polynomial needs m ~ 2.5 pieces per radian. Double: only a start within one small step (the region is small). */
+#if LSM_REAL_IS_FLOAT
+#define CL_ANCHOR_POLY_MAX 64
+#else
+#define CL_ANCHOR_POLY_MAX 1
+#endif
+
+/* The state at st->s_mm (< len) evaluated from the start of the segment, in m equal pieces that are small steps:
+ * piece j has phi_j = h (k0 + c h (j + 1/2)), so |phi_j| <= (|k0| s + |c| s^2) / m, and b_j = c s^2 / m^2. As
+ * accurate as the exact evaluation (each piece to a couple of eps), not bit for bit the same. False (nothing
+ * changed) if it would take more than CL_ANCHOR_POLY_MAX pieces. */
+static bool cl_anchor_poly(lsm_clothoid_stepper *st)
+{
+    const lsm_clothoid *cl = &st->seg;
+    const lsm_real s = st->s_mm, k0 = cl->kappa0_per_mm, c = cl->c_per_mm2;
+    const lsm_real bb = lsm_fabs(c) * s * s, ph = lsm_fabs(k0) * s + bb;
+    int m = 1;
+    if (!(ph <= (lsm_real)LSM_CLOTHOID_FAST_PHI_RAD && bb <= (lsm_real)LSM_CLOTHOID_FAST_B_RAD)) {
+        const lsm_real mp = ph * (LSM_R(1.0) / (lsm_real)LSM_CLOTHOID_FAST_PHI_RAD);
+        const lsm_real mb = lsm_sqrt(bb * (LSM_R(1.0) / (lsm_real)LSM_CLOTHOID_FAST_B_RAD));
+        const lsm_real mm = lsm_ceil(mp > mb ? mp : mb);
+        if (!(mm <= (lsm_real)CL_ANCHOR_POLY_MAX))
+            return false;
+        m = (int)mm;
+    }
+    cl_sincos(cl->theta0_rad, &st->ty, &st->tx);
+    st->x_mm = cl->x0_mm;
+    st->y_mm = cl->y0_mm;
+    st->cx_mm = st->cy_mm = LSM_R(0.0);
+    if (m == 1) { /* the usual block entry: s is short */
+        if (s > LSM_R(0.0))
+            cl_apply(st, s, cl_local_poly(k0 * s, c * s * s));
+    } else {
+        const lsm_real h = s / (lsm_real)m, b = c * h * h;
+        for (int j = 0; j < m; j++)
+            cl_apply(st, h, cl_local_any((k0 + c * (h * (lsm_real)j)) * h, b)); /* checks the region again */
+    }
+    st->kappa_per_mm = k0 + c * s;
+    st->since_anchor = 0;
+    return true;
 }
 
 lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoid *seg, lsm_real s0_mm,
@@ -451,9 +672,8 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
 {
     if (st == NULL || seg == NULL)
         return LSM_E_NULL;
-    lsm_clothoid tmp;
-    lsm_status r = lsm_clothoid_init(&tmp, seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm,
-                                     seg->c_per_mm2, seg->len_mm);
+    lsm_status r = cl_check_seg(seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm, seg->c_per_mm2,
+                                seg->len_mm);
     if (r != LSM_OK)
         return r;
     r = cl_check(s0_mm);
@@ -461,11 +681,14 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
         return r;
     if (s0_mm < LSM_R(0.0) || s0_mm > seg->len_mm)
         return LSM_E_RANGE;
-    st->seg = tmp;
+    st->seg = *seg;
     st->s_mm = s0_mm;
     st->cs_mm = LSM_R(0.0);
     st->anchor_every = anchor_every;
-    cl_anchor(st);
+    /* from the segment's start in small steps (the usual start, just after the beginning, is one of them); at the
+     * end (exactly the end state) or beyond CL_ANCHOR_POLY_MAX pieces, the exact evaluation */
+    if (!(s0_mm < seg->len_mm && cl_anchor_poly(st)))
+        cl_anchor(st);
     return LSM_OK;
 }
 
@@ -498,35 +721,53 @@ void lsm_clothoid_local(lsm_real a, lsm_real b, lsm_real *er_out, lsm_real *ei_o
     *mi_out = mi;
 }
 
-/* One sub-step of length h whose turning |k h| + |c h^2| is at most about 1 rad. */
-static void cl_substep(lsm_clothoid_stepper *st, lsm_real h)
+/* Most sub-steps a step outside the small-step region is cut into for the polynomial; beyond, the general series.
+ * Float only: there two or three polynomial sub-steps cost less than one general series (350 against 440
+ * instructions at |kappa ds| = 0.5); the double region is so small that the sub-steps would be many, each adding
+ * its rounding (the host build does not need the speed). */
+#if LSM_REAL_IS_FLOAT
+#define CL_POLY_SPLIT_MAX 4
+#else
+#define CL_POLY_SPLIT_MAX 1
+#endif
+
+/* A step outside the small-step region (ph = |a| + |b|). Cut into m <= CL_POLY_SPLIT_MAX equal sub-steps if each
+ * is then small: sub-step j has phi_j = h (k + c h (j + 1/2)), so |phi_j| <= ph / m, and b_j = b / m^2. Otherwise
+ * the general series, on sub-steps that turn at most about 1 rad. */
+static void cl_step_general(lsm_clothoid_stepper *st, lsm_real ds, lsm_real a, lsm_real b)
 {
-    lsm_real er, ei, mr, mi;
-    lsm_clothoid_local(st->kappa_per_mm * h, st->seg.c_per_mm2 * h * h, &er, &ei, &mr, &mi);
-    const lsm_real tx = st->tx, ty = st->ty;
-    /* compensated sums: the increments are small against the coordinates */
-    const lsm_real ix = h * (tx * mr - ty * mi) - st->cx_mm, iy = h * (tx * mi + ty * mr) - st->cy_mm;
-    const lsm_real nxp = st->x_mm + ix, nyp = st->y_mm + iy;
-    st->cx_mm = (nxp - st->x_mm) - ix;
-    st->cy_mm = (nyp - st->y_mm) - iy;
-    st->x_mm = nxp;
-    st->y_mm = nyp;
-    lsm_real nx = tx * er - ty * ei, ny = tx * ei + ty * er;
-    const lsm_real f = LSM_R(1.5) - LSM_R(0.5) * (nx * nx + ny * ny); /* one Newton step towards |t| = 1 */
-    st->tx = nx * f;
-    st->ty = ny * f;
-    st->kappa_per_mm += st->seg.c_per_mm2 * h; /* reset from the arc length after the step */
+    const lsm_real ph = lsm_fabs(a) + lsm_fabs(b), ab = lsm_fabs(b);
+    int m = 0;
+    for (int k = 2; k <= CL_POLY_SPLIT_MAX; k++) {
+        const lsm_real kr = (lsm_real)k;
+        if (ph <= kr * (lsm_real)LSM_CLOTHOID_FAST_PHI_RAD && ab <= kr * kr * (lsm_real)LSM_CLOTHOID_FAST_B_RAD) {
+            m = k;
+            break;
+        }
+    }
+    if (m == 0) {
+        if (ph <= LSM_R(1.0)) {
+            cl_apply(st, ds, cl_local_any(a, b));
+            return;
+        }
+        m = (int)lsm_ceil(ph);
+    }
+    const lsm_real c = st->seg.c_per_mm2;
+    const lsm_real h = ds / (lsm_real)m;
+    for (int i = 0; i < m; i++) {
+        cl_apply(st, h, cl_local_any(st->kappa_per_mm * h, c * h * h)); /* checks the region again */
+        st->kappa_per_mm += c * h; /* reset from the arc length after the step */
+    }
 }
 
 lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_clothoid_state *out)
 {
     if (st == NULL)
         return LSM_E_NULL;
-    lsm_status r = cl_check(ds_mm);
-    if (r != LSM_OK)
-        return r;
-    if (ds_mm < LSM_R(0.0))
-        return LSM_E_NEG_FEED;
+    if (!(ds_mm >= LSM_R(0.0) && ds_mm <= LSM_REAL_MAX)) { /* NaN, infinite or negative */
+        lsm_status r = cl_check(ds_mm);
+        return r != LSM_OK ? r : LSM_E_NEG_FEED;
+    }
     const lsm_real left = st->seg.len_mm - st->s_mm;
     bool at_end = false;
     if (ds_mm >= left) {
@@ -534,34 +775,31 @@ lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_cloth
         at_end = true;
     }
     if (ds_mm > LSM_R(0.0)) {
-        lsm_real ph = lsm_fabs(st->kappa_per_mm) * ds_mm + lsm_fabs(st->seg.c_per_mm2) * ds_mm * ds_mm;
-        if (ph <= LSM_R(1.0)) {
-            cl_substep(st, ds_mm);
-        } else { /* rare: a step that turns more than 1 rad */
-            int m = (int)lsm_ceil(ph);
-            lsm_real h = ds_mm / (lsm_real)m;
-            for (int i = 0; i < m; i++)
-                cl_substep(st, h);
-        }
+        const lsm_real c = st->seg.c_per_mm2;
+        const lsm_real a = st->kappa_per_mm * ds_mm, b = c * ds_mm * ds_mm;
+        if (cl_local_is_small(a, b)) /* the usual step: a fixed polynomial */
+            cl_apply_hot(st, ds_mm, cl_local_poly_hot(a, b));
+        else
+            cl_step_general(st, ds_mm, a, b);
         const lsm_real is = ds_mm - st->cs_mm, ns = st->s_mm + is;
         st->cs_mm = (ns - st->s_mm) - is;
         st->s_mm = ns;
-        if (st->s_mm >= st->seg.len_mm)
+        if (ns >= st->seg.len_mm)
             at_end = true;
-        st->kappa_per_mm = st->seg.kappa0_per_mm + st->seg.c_per_mm2 * st->s_mm;
+        st->kappa_per_mm = st->seg.kappa0_per_mm + c * ns;
         st->since_anchor++;
     }
     if (at_end) {
         st->s_mm = st->seg.len_mm;
         cl_anchor(st); /* land exactly on the end state */
     } else if (st->anchor_every != 0 && st->since_anchor >= st->anchor_every) {
-        cl_anchor(st);
+        if (!cl_anchor_poly(st))
+            cl_anchor(st);
     }
     if (out != NULL) {
-        const lsm_real s = st->s_mm;
         out->x_mm = st->x_mm;
         out->y_mm = st->y_mm;
-        out->theta_rad = st->seg.theta0_rad + s * (st->seg.kappa0_per_mm + LSM_R(0.5) * st->seg.c_per_mm2 * s);
+        out->theta_rad = cl_theta(&st->seg, st->s_mm);
         out->kappa_per_mm = st->kappa_per_mm;
     }
     return LSM_OK;
@@ -585,7 +823,7 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
     if (!(s > LSM_R(0.0)) || !(phi <= (lsm_real)LSM_CLOTHOID_FIT_MAX_PHASE_RAD))
         return false;
     lsm_real mr[3], mi[3];
-    cl_pieces(f->th0, f->k0, c, s, J ? 3 : 1, mr, mi);
+    cl_pieces(f->th0, f->k0, c, s, J ? 3 : 1, mr, mi, NULL);
     f->evals++;
     *F1 = f->d0 + f->nx * mr[0] + f->ny * mi[0];
     *F2 = s * (f->k0 + LSM_R(0.5) * c * s) - f->delta;
@@ -593,7 +831,9 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
         const lsm_real th = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
         /* dP/dc = int (t^2 / 2) i e^{i theta} dt = (i M2) / 2 */
         J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]);   /* dF1/dc */
-        J[1] = f->nx * lsm_cos(th) + f->ny * lsm_sin(th);       /* dF1/ds */
+        lsm_real co, si;
+        cl_sincos(th, &si, &co);
+        J[1] = f->nx * co + f->ny * si;                         /* dF1/ds */
         J[2] = LSM_R(0.5) * s * s;                              /* dF2/dc */
         J[3] = f->k0 + c * s;                                   /* dF2/ds */
     }
@@ -638,7 +878,9 @@ lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, 
 
     if (lsm_fabs(f.d0) <= d_err) {
         /* on the line: the only solution is s = 0, if the tangent is already along the normal */
-        const lsm_real cr = f.nx * lsm_sin(f.th0) - f.ny * lsm_cos(f.th0);
+        lsm_real co, si;
+        cl_sincos(f.th0, &si, &co);
+        const lsm_real cr = f.nx * si - f.ny * co;
         if (lsm_fabs(cr) <= LSM_R(16.0) * LSM_REAL_EPS) {
             out->c_per_mm2 = LSM_R(0.0);
             out->s_mm = LSM_R(0.0);
@@ -733,7 +975,7 @@ lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, 
     if (!conv)
         return LSM_E_NOT_CONVERGED;
     lsm_real mr[3], mi[3];
-    cl_pieces(f.th0, f.k0, c, s, 1, mr, mi);
+    cl_pieces(f.th0, f.k0, c, s, 1, mr, mi, NULL);
     out->c_per_mm2 = c;
     out->s_mm = s;
     out->end.x_mm = f.x0 + mr[0];

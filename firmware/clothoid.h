@@ -27,15 +27,25 @@
  * mpmath, tests/py/test_fresnel.py); float: the same code, terminated at float epsilon.
  *
  * Incremental stepping (lsm_clothoid_step): the state (x, y, tangent as a unit vector, kappa) is
- * advanced by ds with the same local Taylor series (psi(u) = kappa ds u + c ds^2 u^2 / 2), with no
- * trigonometry and no re-integration from 0; the sums of position and arc length are compensated
- * (Kahan: in float, s += ds alone would lose 1e-2 mm over 1e4 steps of 0.01 mm), the
- * tangent vector is renormalised every step and the state is re-anchored on an exact evaluation
- * every `anchor_every` steps. Error: the series is truncated below epsilon per step, so what is
- * left is rounding: mainly the direction of the tangent, which random-walks by about eps per step,
- * so that the position drifts by roughly (distance since the anchor) * sqrt(steps) * eps
- * (measured in tests/test_clothoid.c and reported in docs/clothoid.md). Cost on a Cortex-M4F (float):
- * ~300 instructions per step, ~330 with re-anchoring every 256 steps; a direct evaluation ~900.
+ * advanced by ds with the local Taylor series of e^{i psi(u)}, psi(u) = kappa ds u + c ds^2 u^2 / 2, with
+ * no trigonometry and no re-integration from 0. The usual step is small (per-cycle steps turn |kappa ds|
+ * < 0.15 rad in the contour program): for |psi'(1/2)| <= LSM_CLOTHOID_FAST_PHI_RAD and |c ds^2| <=
+ * LSM_CLOTHOID_FAST_B_RAD the series is a fixed polynomial about the step's midpoint (no loop, no test per
+ * term, no division; lsm_clothoid_local_fast), truncated below eps/16 by a bound on the region. Larger
+ * steps are cut into 2-4 such sub-steps (float), or take the general series (lsm_clothoid_local, summed to
+ * eps) on sub-steps that turn at most 1 rad. The sums of position and arc length are compensated (Kahan: in
+ * float, s += ds alone would lose 1e-2 mm over 1e4 steps of 0.01 mm), the tangent is renormalised every
+ * step (one Newton step, 1.5 - |t|^2 / 2) and every `anchor_every` steps the state is re-anchored on an
+ * evaluation from the segment's start: in small-step pieces (float, up to 64 pieces: |kappa0| s + |c| s^2
+ * up to 25.6 rad), else the exact evaluation. The start state (lsm_clothoid_stepper_init) is evaluated the same
+ * way: just after the segment's start, one small step. The end of the segment is landed on exactly (the
+ * state of lsm_clothoid_eval, bit for bit). Error: the truncation is below eps/16, so what is left is
+ * rounding: mainly the direction of the tangent, which random-walks by about eps per step, so that the
+ * position drifts by roughly (distance since the anchor) * sqrt(steps) * eps (measured in
+ * tests/test_clothoid.c and reported in docs/clothoid.md). Cost on a Cortex-M4F (float, -Os, instructions):
+ * ~155 per step whatever |kappa ds| up to 0.4 rad (about 350 at 0.5 rad), ~170 with re-anchoring every 64
+ * steps; starting at a block's entry (lsm_clothoid_init + lsm_clothoid_stepper_init) ~340; a direct
+ * evaluation ~1 050.
  *
  * Fit (paper section IV, eqs 13-16): from a start state, find (c, s) so that the end point lies on
  * the line A x + B y + C = 0 and the clothoid meets it at a right angle. Eq 16 (tan theta * m = -1)
@@ -58,6 +68,17 @@
 /* Most Taylor terms per series (the sums stop earlier, at epsilon). */
 #ifndef LSM_CLOTHOID_MAX_TERMS
 #define LSM_CLOTHOID_MAX_TERMS 40
+#endif
+/* The small-step region of lsm_clothoid_local_fast (and of the stepper's usual step): |a + b/2| (the turning of
+ * the step at its midpoint) and |b| (twice the turning that the sharpness adds), rad. Inside, a fixed polynomial is
+ * accurate to better than eps/16 (float: 5.1e-9 at the corners, double: 4.9e-18; clothoid.c, docs/clothoid.md),
+ * so the double region is smaller. Not meant to be overridden: the bounds belong to the polynomial. */
+#if LSM_REAL_IS_FLOAT
+#define LSM_CLOTHOID_FAST_PHI_RAD 0.4
+#define LSM_CLOTHOID_FAST_B_RAD 0.16
+#else
+#define LSM_CLOTHOID_FAST_PHI_RAD 0.02
+#define LSM_CLOTHOID_FAST_B_RAD 0.001
 #endif
 /* Fit: Newton iteration cap, and the largest turning (rad) a candidate may have. */
 #ifndef LSM_CLOTHOID_FIT_MAX_ITER
@@ -121,6 +142,12 @@ void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_cl
  * the corner module; meant for |a| + |b| <= ~1 (a few terms). */
 void lsm_clothoid_local(lsm_real a, lsm_real b, lsm_real *er, lsm_real *ei, lsm_real *mr, lsm_real *mi);
 
+/* The same E and M, cheaper for small steps: for |a + b/2| <= LSM_CLOTHOID_FAST_PHI_RAD and
+ * |b| <= LSM_CLOTHOID_FAST_B_RAD a fixed polynomial with no loop and no division (about 50 flops; truncation below
+ * eps/16, the rest is rounding, a few eps), otherwise lsm_clothoid_local. Equal to lsm_clothoid_local to a few eps,
+ * not bit for bit. The stepper uses it. */
+void lsm_clothoid_local_fast(lsm_real a, lsm_real b, lsm_real *er, lsm_real *ei, lsm_real *mr, lsm_real *mi);
+
 /* Incremental evaluation for the per-cycle interpolator (see the header comment). */
 typedef struct lsm_clothoid_stepper {
     lsm_clothoid seg;
@@ -134,11 +161,13 @@ typedef struct lsm_clothoid_stepper {
     uint32_t anchor_every;    /* re-anchor every this many steps (0: never) */
 } lsm_clothoid_stepper;
 
-/* Start at arc length s0 (0 <= s0 <= len). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_INF, LSM_E_RANGE. */
+/* Start at arc length s0 (0 <= s0 <= len), evaluated from the segment's start (see the header comment; at s0 = len
+ * exactly the state of lsm_clothoid_eval). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_INF, LSM_E_RANGE. */
 lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoid *seg, lsm_real s0_mm,
                                      uint32_t anchor_every);
-/* Advance by ds >= 0 (clamped at the end of the segment); out may be NULL. The angle reported is
- * theta0 + kappa0 s + c s^2/2 (exact); x, y and the tangent vector come from the stepping.
+/* Advance by ds >= 0 (clamped at the end of the segment); out may be NULL (the interpolator reads st->x_mm and
+ * st->y_mm). The angle reported is theta0 + kappa0 s + c s^2/2 (exact); x, y and the tangent vector come from
+ * the stepping.
  * Errors: LSM_E_NULL, LSM_E_NAN / LSM_E_INF (ds), LSM_E_NEG_FEED (ds < 0). */
 lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_clothoid_state *out);
 

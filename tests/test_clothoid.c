@@ -314,6 +314,226 @@ static void test_stepper(void **state)
     assert_int_equal(lsm_clothoid_stepper_init(&st, &cl, -1, 0), LSM_E_RANGE);
 }
 
+/* ---- the small-step kernel and large steps ---- */
+
+/* E = e^{i psi(1)} and M = int_0^1 e^{i psi(u)} du, psi(u) = a u + b u^2 / 2, in long double (16 panels). */
+static void ref_local(double a, double b, long double *er, long double *ei, long double *mr, long double *mi)
+{
+    long double sx = 0, sy = 0;
+    for (int j = 0; j < 16; j++) {
+        long double px, py;
+        ref_panel(0, a, b, j / 16.0L, (j + 1) / 16.0L, &px, &py);
+        sx += px;
+        sy += py;
+    }
+    *er = cosl((long double)a + 0.5L * b);
+    *ei = sinl((long double)a + 0.5L * b);
+    *mr = sx;
+    *mi = sy;
+}
+
+/* Largest error of lsm_clothoid_local_fast (and of lsm_clothoid_local, for comparison) against the reference, in
+ * units of eps, over a grid of (phi = a + b/2, b) spanning [-phi_max, phi_max] x [-b_max, b_max]. */
+static double local_fast_err(double phi_max, double b_max, int n, double *err_general)
+{
+    const double eps = IS_F ? 1.1920929e-7 : 2.220446049250313e-16;
+    double worst = 0, worst_g = 0;
+    for (int i = -n; i <= n; i++) {
+        for (int j = -n; j <= n; j++) {
+            const lsm_real b = (lsm_real)(b_max * j / n);
+            const lsm_real a = (lsm_real)(phi_max * i / n - 0.5 * b);
+            long double er, ei, mr, mi;
+            ref_local(a, b, &er, &ei, &mr, &mi);
+            lsm_real fer, fei, fmr, fmi, ger, gei, gmr, gmi;
+            lsm_clothoid_local_fast(a, b, &fer, &fei, &fmr, &fmi);
+            lsm_clothoid_local(a, b, &ger, &gei, &gmr, &gmi);
+            const double e = (double)fmaxl(fmaxl(fabsl(fer - er), fabsl(fei - ei)),
+                                           fmaxl(fabsl(fmr - mr), fabsl(fmi - mi)));
+            const double g = (double)fmaxl(fmaxl(fabsl(ger - er), fabsl(gei - ei)),
+                                           fmaxl(fabsl(gmr - mr), fabsl(gmi - mi)));
+            if (e > worst)
+                worst = e;
+            if (g > worst_g)
+                worst_g = g;
+        }
+    }
+    *err_general = worst_g / eps;
+    return worst / eps;
+}
+
+static void test_local_fast(void **state)
+{
+    (void)state;
+    const double P = LSM_CLOTHOID_FAST_PHI_RAD, B = LSM_CLOTHOID_FAST_B_RAD;
+    double g;
+    /* inside the small-step region, corners and edges included (the truncation is largest at the corners): the
+     * polynomial is as accurate as the general series, about 1 eps (rounding). Measured: float 1.01 eps (general
+     * series 2.00), double 1.15 (1.50). Truncated earlier it fails: sin(phi/2) to x^3 gives 44 eps (float) and 7500
+     * (double), G without r^3 5 and 670, without r^2 q 3 and 134 (float, double). */
+    const double in = local_fast_err(P, B, 24, &g);
+    print_message("local_fast: inside the region (|a + b/2| <= %g, |b| <= %g) max error %.2f eps (general series "
+                  "%.2f eps)\n",
+                  P, B, in, g);
+    assert_true(in <= 1.5);
+    assert_true(in <= g + 0.5);
+    /* the truncation alone: it is systematic, the rounding is not, so the mean error over many points near a
+     * corner of the region (where the truncation is largest) shows it. Measured: at most 0.03 eps (rounding is
+     * not quite unbiased either). Without the cos(phi/2) x^6 term or the r q^2 term of G the float means are 1.1
+     * and 0.5 eps, without the q^3 term of G the double mean is 0.65 eps (dropping it costs float only 0.06 eps). */
+    const double eps = IS_F ? 1.1920929e-7 : 2.220446049250313e-16;
+    double worst_mean = 0;
+    for (int corner = 0; corner < 4; corner++) {
+        long double se[4] = {0, 0, 0, 0};
+        const int nn = 4000;
+        g_rng = 0x9E3779B97F4A7C15ull + (uint64_t)corner;
+        for (int k = 0; k < nn; k++) {
+            const lsm_real b = (lsm_real)(((corner & 1) ? -B : B) * uni(0.9, 1.0));
+            const lsm_real a = (lsm_real)(((corner & 2) ? -P : P) * uni(0.9, 1.0) - 0.5 * b);
+            long double er, ei, mr, mi;
+            ref_local(a, b, &er, &ei, &mr, &mi);
+            lsm_real fer, fei, fmr, fmi;
+            lsm_clothoid_local_fast(a, b, &fer, &fei, &fmr, &fmi);
+            se[0] += fer - er;
+            se[1] += fei - ei;
+            se[2] += fmr - mr;
+            se[3] += fmi - mi;
+        }
+        for (int k = 0; k < 4; k++)
+            worst_mean = fmax(worst_mean, fabs((double)(se[k] / nn) / eps));
+    }
+    print_message("local_fast: largest mean error near a corner of the region %.3f eps\n", worst_mean);
+    assert_true(worst_mean <= 0.1);
+    /* outside the region it is the general series: the same accuracy up to steps that turn 1 rad */
+    const double out = local_fast_err(1.0, 1.0, 10, &g);
+    print_message("local_fast: |a + b/2| <= 1, |b| <= 1: max error %.2f eps (general series %.2f eps)\n", out, g);
+    assert_true(out <= 4.0);
+}
+
+/* One step of ds from s0 against the long-double reference: position error (mm) and tangent error (rad). */
+static void one_step_err(const lsm_clothoid *cl, double s0, double ds, double *pos_err, double *tan_err)
+{
+    lsm_clothoid_stepper st;
+    assert_int_equal(lsm_clothoid_stepper_init(&st, cl, (lsm_real)s0, 0), LSM_OK);
+    const double x0 = st.x_mm, y0 = st.y_mm, tx0 = st.tx, ty0 = st.ty, sa = st.s_mm;
+    assert_int_equal(lsm_clothoid_step(&st, (lsm_real)ds, NULL), LSM_OK);
+    /* the step's own error: from the stepper's start state, along the same arc lengths */
+    long double px = 0, py = 0;
+    const long double s1 = st.s_mm;
+    const int np = 64;
+    for (int k = 0; k < np; k++) {
+        long double qx, qy;
+        ref_panel(0, cl->kappa0_per_mm, cl->c_per_mm2, sa + (s1 - sa) * k / np, sa + (s1 - sa) * (k + 1) / np, &qx,
+                  &qy);
+        px += qx;
+        py += qy;
+    }
+    /* rotate by the start tangent of the reference (angle theta(sa) - theta0) into the stepper's frame */
+    const long double th_a = sa * (cl->kappa0_per_mm + 0.5L * cl->c_per_mm2 * sa);
+    const long double ca = cosl(th_a), sn = sinl(th_a);
+    const long double lx = px * ca + py * sn, ly = -px * sn + py * ca; /* in the frame of the start tangent */
+    const long double rx = x0 + lx * tx0 - ly * ty0, ry = y0 + lx * ty0 + ly * tx0;
+    *pos_err = hypot((double)(st.x_mm - rx), (double)(st.y_mm - ry));
+    const long double dth = (s1 * (cl->kappa0_per_mm + 0.5L * cl->c_per_mm2 * s1)) - th_a;
+    const long double etx = tx0 * cosl(dth) - ty0 * sinl(dth), ety = tx0 * sinl(dth) + ty0 * cosl(dth);
+    *tan_err = hypot((double)(st.tx - etx), (double)(st.ty - ety));
+}
+
+static void test_stepper_large_steps(void **state)
+{
+    (void)state;
+    const double eps = IS_F ? 1.1920929e-7 : 2.220446049250313e-16;
+    /* single steps from |kappa ds| = 0.001 to 3 rad with the sharpness up to the edge of the small-step region
+     * and beyond (small steps, steps cut into 2-4 polynomial sub-steps, the general series, steps split at 1 rad):
+     * each must be as good as rounding allows, whatever path it takes */
+    const double kds[] = {0.001, 0.05, 0.2, 0.39, 0.41, 0.6, 0.79, 1.2, 1.59, 1.61, 3.0};
+    const double bfac[] = {0, 0.5, 1, -1, 3};
+    double worst_pos = 0, worst_tan = 0;
+    for (size_t i = 0; i < sizeof kds / sizeof kds[0]; i++) {
+        for (size_t j = 0; j < sizeof bfac / sizeof bfac[0]; j++) {
+            const double ds = 0.25, k0 = kds[i] / ds;
+            const double b = bfac[j] * LSM_CLOTHOID_FAST_B_RAD * (kds[i] < 0.2 ? 0.5 : 1.0);
+            const double c = b / (ds * ds);
+            lsm_clothoid cl;
+            assert_int_equal(lsm_clothoid_init(&cl, 0, 0, 0.3, k0, c, 10 * ds), LSM_OK);
+            double pe, te;
+            one_step_err(&cl, 0, ds, &pe, &te);
+            /* the position moves by ds: a few eps of it; the tangent: a few eps */
+            if (!(pe <= 4 * eps * ds && te <= 4 * eps)) {
+                print_error("kappa ds %g, c ds^2 %g: position error %.3g mm (%.2f eps ds), tangent %.3g (%.2f eps)\n",
+                            kds[i], b, pe, pe / (eps * ds), te, te / eps);
+                fail();
+            }
+            if (pe / (eps * ds) > worst_pos)
+                worst_pos = pe / (eps * ds);
+            if (te / eps > worst_tan)
+                worst_tan = te / eps;
+        }
+    }
+    print_message("large steps: worst single step %.2f eps * ds in position, %.2f eps in the tangent\n", worst_pos,
+                  worst_tan);
+    /* many large steps: 400 steps of 0.25 mm at kappa about 1.3 /mm (|kappa ds| 0.3 to 0.36), no anchoring, against
+     * the long-double reference: rounding only, as in test_stepper */
+    lsm_clothoid cl;
+    assert_int_equal(lsm_clothoid_init(&cl, 20, -5, -1.0, 1.2, 0.0025, 100), LSM_OK);
+    long n;
+    const double d = step_drift(&cl, 0.25, 0, &n);
+    print_message("large steps: %ld steps of 0.25 mm (|kappa ds| 0.3-0.36): max drift %.3g mm\n", n, d);
+    assert_true(d < 2 * 100.0 * sqrt((double)n) * eps + 8 * eps * 100);
+}
+
+/* Starting anywhere (and re-anchoring: the same evaluation from the segment's start) is as accurate as the exact
+ * evaluation: the short starts of block entry (one small step), starts that need many small pieces, and starts
+ * beyond that (the exact evaluation). */
+static void test_stepper_start(void **state)
+{
+    (void)state;
+    const double eps = IS_F ? 1.1920929e-7 : 2.220446049250313e-16;
+    const double segs[][6] = {
+        /* x0, y0, theta0, kappa0, c, len */
+        {3, -2, 0.7, -0.01, 0.0009, 100}, /* turns 3.5 rad */
+        {-40, 25, 2.5, 0.6, -0.35, 0.3},  /* a corner blend */
+        {0, 0, -1.0, 31.7, -471, 0.0677}, /* a tight one */
+        {10, 10, 0.2, 0.05, 2.0, 12},     /* turns 150 rad: beyond the pieces, the exact evaluation */
+    };
+    const double frac[] = {0, 1e-4, 0.003, 0.05, 0.2, 0.5, 0.9, 1};
+    double worst_pos = 0, worst_tan = 0;
+    for (size_t i = 0; i < sizeof segs / sizeof segs[0]; i++) {
+        lsm_clothoid cl;
+        assert_int_equal(lsm_clothoid_init(&cl, segs[i][0], segs[i][1], segs[i][2], segs[i][3], segs[i][4],
+                                           segs[i][5]),
+                         LSM_OK);
+        for (size_t j = 0; j < sizeof frac / sizeof frac[0]; j++) {
+            const lsm_real s0 = (lsm_real)(frac[j] * cl.len_mm);
+            lsm_clothoid_stepper st;
+            assert_int_equal(lsm_clothoid_stepper_init(&st, &cl, s0, 0), LSM_OK);
+            double rx, ry;
+            ref_integral(cl.theta0_rad, cl.kappa0_per_mm, cl.c_per_mm2, s0, &rx, &ry);
+            const long double th = cl.theta0_rad + s0 * (cl.kappa0_per_mm + 0.5L * cl.c_per_mm2 * s0);
+            const double phi = fabs(cl.kappa0_per_mm * s0) + 0.5 * fabs(cl.c_per_mm2) * s0 * s0;
+            /* a few eps of the coordinates, and of the rounding of the angle (eps per radian); measured: 1.4 eps
+             * (double) and 0.9 (float) of |x0| + |y0| + s0, the tangent 1.4 eps (1 + phi) */
+            const double scale = fabs(cl.x0_mm) + fabs(cl.y0_mm) + s0;
+            const double pe = hypot(st.x_mm - cl.x0_mm - rx, st.y_mm - cl.y0_mm - ry);
+            const double te = hypot((double)(st.tx - cosl(th)), (double)(st.ty - sinl(th)));
+            if (!(pe <= 4 * eps * (scale + phi * hypot(rx, ry)) && te <= 4 * eps * (1 + phi))) {
+                print_error("segment %zu, s0 %.9g: position error %.3g mm, tangent %.3g\n", i, (double)s0, pe, te);
+                fail();
+            }
+            if (scale > 0 && pe / (eps * scale) > worst_pos)
+                worst_pos = pe / (eps * scale);
+            if (te / eps > worst_tan)
+                worst_tan = te / eps;
+            if (s0 == cl.len_mm) { /* the end state exactly */
+                lsm_clothoid_state b;
+                assert_int_equal(lsm_clothoid_eval(&cl, s0, &b), LSM_OK);
+                assert_true(st.x_mm == b.x_mm && st.y_mm == b.y_mm);
+            }
+        }
+    }
+    print_message("stepper start: worst %.2f eps * (|x0| + |y0| + s0) in position, %.2f eps in the tangent\n",
+                  worst_pos, worst_tan);
+}
+
 /* ---- fit ---- */
 
 static void check_fit(const lsm_clothoid_state *s0, double A, double B, double C, const lsm_clothoid_fit_result *r, long n)
@@ -452,6 +672,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fresnel_reference), cmocka_unit_test(test_fresnel_derivative),
         cmocka_unit_test(test_integral_cases),    cmocka_unit_test(test_integral_random),
         cmocka_unit_test(test_eval),              cmocka_unit_test(test_stepper),
+        cmocka_unit_test(test_local_fast),        cmocka_unit_test(test_stepper_large_steps),
+        cmocka_unit_test(test_stepper_start),
         cmocka_unit_test(test_fit_lines),         cmocka_unit_test(test_fit_random),
         cmocka_unit_test(test_fit_bad_input),
     };

@@ -14,6 +14,8 @@
  *      largest single cycle (read per call, so +-40 instructions).
  * Output, one line per benchmark (scripts/arm_bench.sh turns it into a table):
  *   bench <name> <instructions, 2 decimals> <unit> calls=<N> [max=<M> max_at=<where>]
+ * The clothoid stepper (clothoid_step_*, clothoid_block_entry, clothoid_eval): the mean as above; max, the largest
+ * single call, from a second pass that reads every call on its own (+-40).
  * The planner and interpolator benchmarks are in bench_planner.c.
  *   size <type> <bytes>
  * Exit code 0, or 1 if the calibration fails (99: HardFault).
@@ -23,6 +25,7 @@
 #include <string.h>
 
 #include "bench_planner.h"
+#include "clothoid.h"
 #include "cm_board.h"
 #include "cm_out.h"
 #include "move.h"
@@ -298,6 +301,98 @@ static void bench_stepgen(const char *name, uint8_t n_axes)
     out_bench(name, insns_x100(counts, cycles), "cycle", cycles, max_insns);
 }
 
+/* ---- clothoid stepper: what interp.c calls per cycle on a clothoid block (lsm_clothoid_step) and at block entry
+ * (lsm_clothoid_init + lsm_clothoid_stepper_init) ---- */
+
+static lsm_clothoid_stepper g_cst;
+static lsm_clothoid g_cseg;
+
+/* Clothoid blocks of the contour program (firmware/port/contour) with the cursor's offset at entry (s0). */
+typedef struct cl_entry {
+    float k0, c, len, s0, th0;
+} cl_entry;
+
+static const cl_entry k_cl_entries[8] = {
+    {0.0f, 0.00271966f, 2.84329f, 0.0421085f, 0.0f},
+    {0.1f, 0.00274748f, 2.84329f, 0.0954885f, -0.448705f},
+    {31.6934f, -471.185f, 0.0676876f, 9.94876e-05f, 1.07263f},
+    {7.26892f, -61.1442f, 0.118882f, 0.000501692f, 0.444982f},
+    {0.218756f, -2.18779f, 0.0999895f, 0.00970078f, 0.0109367f},
+    {0.599577f, -0.348337f, 0.165717f, 0.00557643f, 0.0496799f},
+    {0.593474f, -0.182161f, 0.283386f, 0.0281467f, 0.0809828f},
+    {0.0f, 3.74738f, 0.109703f, 0.0f, 0.0f},
+};
+
+static void call_cl_step(void *ctx, uint32_t i)
+{
+    (void)i;
+    (void)lsm_clothoid_step(&g_cst, *(const lsm_real *)ctx, NULL);
+}
+
+static void call_cl_entry(void *ctx, uint32_t i)
+{
+    const cl_entry *e = &k_cl_entries[i % 8u];
+    lsm_clothoid seg;
+    (void)ctx;
+    (void)lsm_clothoid_init(&seg, 0.0f, 0.0f, e->th0, e->k0, e->c, e->len);
+    (void)lsm_clothoid_stepper_init(&g_cst, &seg, e->s0, 64u);
+}
+
+static void call_cl_eval(void *ctx, uint32_t i)
+{
+    lsm_clothoid_state o;
+    (void)ctx;
+    (void)lsm_clothoid_eval(&g_cseg, 0.01f * (lsm_real)(i % 500u), &o);
+    __asm__ volatile("" ::"r"(&o) : "memory");
+}
+
+/* The largest single call of n (each read on its own: +-40), the harness subtracted. */
+static int32_t max_single(bench_call fn, void *ctx, uint32_t n)
+{
+    uint32_t mx = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t t0 = systick_now();
+        fn(ctx, i);
+        const uint32_t c = counts_between(t0, systick_now());
+        if (c > mx)
+            mx = c;
+    }
+    return (int32_t)(mx * INSNS_PER_COUNT) - (int32_t)(g_overhead_x100 / 100u);
+}
+
+/* n steps of ds along a clothoid from s = 0, re-anchored every `anchor` steps (0: never), that never reach its
+ * end (which would be an anchor too): the mean (one window around all n, harness subtracted: exact to 40 / n, plus
+ * the few instructions of passing the arguments) and the largest single step (a second pass, read step by step). */
+static void bench_cl_steps(const char *name, lsm_real k0, lsm_real c, lsm_real ds, uint32_t anchor)
+{
+    const uint32_t n = 2048u;
+    (void)lsm_clothoid_init(&g_cseg, 0.0f, 0.0f, 0.3f, k0, c, (lsm_real)n * ds * 1.01f);
+    (void)lsm_clothoid_stepper_init(&g_cst, &g_cseg, 0.0f, anchor);
+    const uint32_t mean = insns_x100(run_counts(call_cl_step, &ds, n), n);
+    (void)lsm_clothoid_stepper_init(&g_cst, &g_cseg, 0.0f, anchor);
+    out_bench(name, mean, "call", n, max_single(call_cl_step, &ds, n));
+}
+
+static void bench_clothoid(void)
+{
+    /* free steps of 0.1 mm with |kappa ds| about 0.001, 0.02 (the contour program's median), 0.15 (its largest)
+     * and 0.5 */
+    bench_cl_steps("clothoid_step_free_kds0.001", 0.01f, 1.0e-6f, 0.1f, 0u);
+    bench_cl_steps("clothoid_step_free_kds0.02", 0.2f, 1.0e-5f, 0.1f, 0u);
+    bench_cl_steps("clothoid_step_free_kds0.15", 1.5f, 1.0e-4f, 0.1f, 0u);
+    bench_cl_steps("clothoid_step_free_kds0.5", 5.0f, 1.0e-4f, 0.1f, 0u);
+    /* re-anchored every 64 steps as interp.c does, along a clothoid that turns 3 rad over the 205 mm (curvature
+     * 0.005 -> 0.025 /mm); max: an anchoring step (an evaluation from the start, so it grows with the turning) */
+    bench_cl_steps("clothoid_step_anchor64", 0.005f, 1.0e-4f, 0.1f, 64u);
+    /* block entry, as interp.c does it: lsm_clothoid_init, then lsm_clothoid_stepper_init at s0 */
+    out_bench("clothoid_block_entry", insns_x100(run_counts(call_cl_entry, NULL, 800u), 800u), "call", 800u,
+              max_single(call_cl_entry, NULL, 800u));
+    /* direct evaluation at s = 0 .. 5 mm on a 5 mm clothoid (curvature 0 -> 0.4 /mm) */
+    (void)lsm_clothoid_init(&g_cseg, 0.0f, 0.0f, 0.3f, 0.0f, 0.08f, 5.0f);
+    out_bench("clothoid_eval", insns_x100(run_counts(call_cl_eval, NULL, 500u), 500u), "call", 500u,
+              max_single(call_cl_eval, NULL, 500u));
+}
+
 int main(void)
 {
     CM_SYST_CSR = 0u;
@@ -345,6 +440,9 @@ int main(void)
     bench_stepgen("stepgen_cycle_1ax", 1);
     bench_stepgen("stepgen_cycle_3ax", 3);
     bench_stepgen("stepgen_cycle_6ax", 6);
+
+    /* clothoid stepper alone */
+    bench_clothoid();
 
     /* look-ahead planner and interpolator (bench_planner.c) */
     const bool planner_ok = bench_planner();

@@ -10,6 +10,9 @@
 #define R1 LSM_R(1.0)
 #define ARC_ANCHOR_CYCLES 256u
 #define CLOTHOID_ANCHOR_STEPS 64u
+/* the piece being run, and the buffer of the piece planned ahead */
+#define CUR(ip) ((ip)->pcs[(ip)->cur])
+#define NXT(ip) ((ip)->pcs[(ip)->cur ^ 1u])
 
 static bool id_lt_pub(uint32_t a, uint32_t b)
 {
@@ -178,13 +181,16 @@ static void ahead(const lsm_interp *ip, lsm_real dist, uint32_t *id, lsm_real *o
     *off = o;
 }
 
-/* Starts a piece whose first sample comes `first` after its start (0 < first <= one cycle). */
-static void start_piece(lsm_interp *ip, const lsm_piece *pc, lsm_real first)
+/* Starts the piece planned ahead (the second buffer) whose first sample comes `first` after its start
+ * (0 < first <= one cycle). */
+static void start_piece(lsm_interp *ip, lsm_real first)
 {
     const lsm_real dt = ip->pl->cfg.cycle_s;
-    ip->pc = *pc;
+    ip->cur ^= 1u;
+    const lsm_piece *pc = &CUR(ip);
     ip->running = 1;
     ip->serial++;
+    ip->pl->piece_stale = 0; /* a piece planned on the current geometry */
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
     ip->phase = 0;
@@ -194,12 +200,12 @@ static void start_piece(lsm_interp *ip, const lsm_piece *pc, lsm_real first)
     ip->rs = R0;
     /* per ramp: the offset of the samples to its phase starts, and the rotation step */
     lsm_real t0[2];
-    t0[0] = ip->pc.ph[0].T_s;
+    t0[0] = CUR(ip).ph[0].T_s;
     t0[1] = t0[0];
     for (int i = 1; i <= 8; i++)
-        t0[1] += ip->pc.ph[i].T_s;
+        t0[1] += CUR(ip).ph[i].T_s;
     for (int r = 0; r < 2; r++) {
-        const uint32_t n1 = ip->pc.ph[r == 0 ? 1 : 9].n_cycles;
+        const uint32_t n1 = CUR(ip).ph[r == 0 ? 1 : 9].n_cycles;
         ip->ce[r] = R1;
         ip->se[r] = R0;
         ip->cd[r] = R1;
@@ -279,14 +285,21 @@ static void boundary_point(const lsm_interp *ip, uint8_t b, swpt *w)
     w->kind = LSM_INTERP_SW_BOUNDARY;
     w->phase = b;
     if (b >= LSM_PIECE_PHASES) {
-        w->blk = ip->pc.end_blk;
+        w->blk = CUR(ip).end_blk;
         w->off = R0;
-        w->v = ip->pc.v1_mm_s;
+        w->v = CUR(ip).v1_mm_s;
         return;
     }
-    const lsm_real d = ip->pc.st[b].s_mm - (ip->pc.st[ip->phase].s_mm + ip->sloc);
+    if (is_ramp_phase(ip->phase) && b == (ip->phase < 8u ? 8u : 16u)) {
+        /* the end of the current ramp: the commitment horizon, exactly the point appends verified */
+        w->blk = ip->hz_blk;
+        w->off = ip->hz_off;
+        w->v = ip->hz_v;
+        return;
+    }
+    const lsm_real d = CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc);
     ahead(ip, d > R0 ? d : R0, &w->blk, &w->off);
-    w->v = ip->pc.st[b].v_mm_s;
+    w->v = CUR(ip).st[b].v_mm_s;
 }
 
 /* The first switch point of the current piece where a replacement can start, given the lead. */
@@ -297,11 +310,11 @@ static void replace_point(const lsm_interp *ip, swpt *w)
     const uint32_t L = ip->lead_cycles;
     if (at_a_zero(ip)) {
         /* the sample L cycles ahead, if the cruise lasts that long (L = 0: the last sample itself) */
-        const bool fits = L == 0u || (is_cruise(p) && ip->tau + (lsm_real)(L + 1u) * dt < ip->pc.ph[p].T_s);
+        const bool fits = L == 0u || (is_cruise(p) && ip->tau + (lsm_real)(L + 1u) * dt < CUR(ip).ph[p].T_s);
         if (fits) {
             w->kind = LSM_INTERP_SW_SAMPLE;
             w->cycle = ip->cycles + 1u + L;
-            ahead(ip, ip->pc.st[p].v_mm_s * (lsm_real)L * dt, &w->blk, &w->off);
+            ahead(ip, CUR(ip).st[p].v_mm_s * (lsm_real)L * dt, &w->blk, &w->off);
             w->v = ip->v_mm_s;
             return;
         }
@@ -330,23 +343,23 @@ static bool next_switch(const lsm_interp *ip, swpt *w)
         w->v = ip->v_mm_s;
         return true;
     }
-    if (ip->pc.hold)
+    if (CUR(ip).hold)
         return false; /* a hold runs to its end */
     if (ip->hold_req || ip->gen != pl->gen) {
         w->mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
         replace_point(ip, w);
-        if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && ip->pc.stop)
+        if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && CUR(ip).stop)
             return false; /* the piece ends at rest anyway: the next one starts from there */
         if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && w->mode == LSM_PIECE_REPLAN)
             w->mode = LSM_PIECE_NORMAL; /* the successor itself (a piece is needed there) */
         return true;
     }
-    if (ip->pc.step && ip->phase < 8u) {
+    if (CUR(ip).step && ip->phase < 8u) {
         boundary_point(ip, 8u, w); /* a step of a staircase: re-plan at the end of its ramp */
         w->mode = LSM_PIECE_REPLAN;
         return true;
     }
-    if (ip->pc.stop)
+    if (CUR(ip).stop)
         return false;
     boundary_point(ip, LSM_PIECE_PHASES, w);
     return true;
@@ -355,7 +368,7 @@ static bool next_switch(const lsm_interp *ip, swpt *w)
 static bool same_switch(const lsm_interp *ip, const lsm_interp_prep *q, const swpt *w)
 {
     if (q->kind != w->kind || q->gen != ip->pl->gen || q->mode != w->mode)
-        return false;
+        return false; /* (a hold planned where a piece is needed keeps its mode even if it fell back to normal) */
     switch (w->kind) {
     case LSM_INTERP_SW_SAMPLE: return q->serial == ip->serial && q->cycle == w->cycle;
     case LSM_INTERP_SW_BOUNDARY: return q->serial == ip->serial && q->phase == w->phase;
@@ -379,12 +392,19 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     q->blk = w->blk;
     q->off_mm = w->off;
     q->v_mm_s = w->v;
-    lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &q->pc);
+    lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &NXT(ip));
+    const bool needed = w->kind == LSM_INTERP_SW_REST ||
+                        (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES);
+    if (st != LSM_OK && w->mode == LSM_PIECE_HOLD && needed && w->v > R0) {
+        /* a piece is needed here (the current one ends) and no hold fits yet: go on normally (planned stops
+         * always exist), the hold takes effect at the next point where a = 0 */
+        st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, LSM_PIECE_NORMAL, &NXT(ip));
+    }
     if (st == LSM_E_INTERNAL) { /* a fallback piece (counted by the planner): it is still a verified stop */
         ip->plan_errors++;
         st = LSM_OK;
     }
-    if (st == LSM_OK && q->pc.T_s > R0) {
+    if (st == LSM_OK && NXT(ip).T_s > R0) {
         q->ready = 1;
         return LSM_OK;
     }
@@ -418,7 +438,7 @@ static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool 
     if (replace)
         ip->replans++;
     ip->gen = g;
-    if (!(q->pc.T_s > R0)) { /* a hold at rest */
+    if (!(NXT(ip).T_s > R0)) { /* a hold at rest */
         ip->running = 0;
         ip->v_mm_s = R0;
         ip->state = LSM_INTERP_HELD;
@@ -428,7 +448,7 @@ static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool 
      * have been released: the piece starts where the cursor is, within rounding of its start) */
     if (!(id_lt_pub(q->blk, ip->blk) || (q->blk == ip->blk && q->off_mm < ip->off_mm)))
         place(ip, q->blk, q->off_mm);
-    start_piece(ip, &q->pc, first);
+    start_piece(ip, first);
 }
 
 /* Stop the clock at boundary p (entered while advancing)? Only where a piece is prepared for it (or, without
@@ -441,18 +461,20 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
     if (q->ready && q->kind == LSM_INTERP_SW_BOUNDARY && q->serial == ip->serial && q->phase == p &&
         q->gen == ip->pl->gen)
         return true;
+    if ((p == 8u || p == 16u) && !CUR(ip).hold && ip->pl->piece_stale)
+        return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */
     if (ip->bg)
         return false;
-    if ((p == 8u || p == 16u) && !ip->pc.hold && ip->pc.st[p].s_mm > ip->pc.st[p - 7u].s_mm)
-        return ip->gen != ip->pl->gen || (p == 8u && ip->pc.step);
+    if ((p == 8u || p == 16u) && !CUR(ip).hold && CUR(ip).st[p].s_mm > CUR(ip).st[p - 7u].s_mm)
+        return ip->gen != ip->pl->gen || (p == 8u && CUR(ip).step);
     return false;
 }
 
 /* Travel of phase p at tau (phase-local); updates the rotation for sin² phases (entered: from the entry angle). */
 static lsm_real phase_travel(lsm_interp *ip, uint8_t p, lsm_real tau, bool entered, lsm_real *v)
 {
-    const lsm_piece_phase *ph = &ip->pc.ph[p];
-    const lsm_kin *st = &ip->pc.st[p];
+    const lsm_piece_phase *ph = &CUR(ip).ph[p];
+    const lsm_kin *st = &CUR(ip).st[p];
     if (p == 0u || p == 8u || p == 16u) {
         *v = st->v_mm_s;
         return st->v_mm_s * tau;
@@ -501,9 +523,9 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
     bool entered = false;
     *ended = false;
     *brk = false;
-    while (p < LSM_PIECE_PHASES && tau >= ip->pc.ph[p].T_s) {
-        ds += ip->pc.ph[p].len_mm - ip->sloc;
-        tau -= ip->pc.ph[p].T_s;
+    while (p < LSM_PIECE_PHASES && tau >= CUR(ip).ph[p].T_s) {
+        ds += CUR(ip).ph[p].len_mm - ip->sloc;
+        tau -= CUR(ip).ph[p].T_s;
         ip->sloc = R0;
         p++;
         entered = true;
@@ -511,8 +533,8 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
             /* a ramp starts: committed until its end, where a = 0 again and a new piece may be taken (planner.h,
              * lsm_planner_set_horizon) */
             const int e = p == 1u ? 8 : 16;
-            ip->hz_v = ip->pc.st[e].v_mm_s;
-            ahead(ip, ip->pc.st[e].s_mm - ip->pc.st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
+            ip->hz_v = CUR(ip).st[e].v_mm_s;
+            ahead(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
         }
         if (p < LSM_PIECE_PHASES && stop_at_boundary(ip, p)) {
             ip->phase = p;
@@ -543,29 +565,29 @@ static void end_piece(lsm_interp *ip)
 {
     lsm_planner *pl = ip->pl;
     ip->running = 0;
-    if (!ip->pc.hold) {
-        if (ip->pc.end_blk == pl->tail) {
+    if (!CUR(ip).hold) {
+        if (CUR(ip).end_blk == pl->tail) {
             const lsm_pblock *b = bk(ip, pl->tail - 1u);
             ip->blk = pl->tail - 1u;
             ip->off_mm = b ? b->g.len : R0;
             lsm_planner_release(pl, ip->blk);
             activate(ip);
-            if (ip->pc.stop) {
+            if (CUR(ip).stop) {
                 for (int i = 0; i < LSM_MAX_AXES; i++) /* the programmed end, exactly */
                     ip->pos[i] = pl->tail_pos[i];
             } else {
                 eval_pos(ip);
             }
-        } else if (bk(ip, ip->pc.end_blk) != NULL) {
-            place(ip, ip->pc.end_blk, R0);
+        } else if (bk(ip, CUR(ip).end_blk) != NULL) {
+            place(ip, CUR(ip).end_blk, R0);
         }
     }
-    if (!ip->pc.stop) {
-        ip->v_mm_s = ip->pc.v1_mm_s;
+    if (!CUR(ip).stop) {
+        ip->v_mm_s = CUR(ip).v1_mm_s;
         return;
     }
     ip->v_mm_s = R0;
-    if (ip->pc.hold) {
+    if (CUR(ip).hold) {
         ip->state = LSM_INTERP_HELD;
     } else if (!path_ahead(ip)) {
         ip->state = pl->finished ? LSM_INTERP_DONE : LSM_INTERP_IDLE;
@@ -590,10 +612,22 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
             w.kind = LSM_INTERP_SW_BOUNDARY;
             w.phase = ip->phase;
             w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
-            ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off); /* the boundary: ds beyond the last sample */
-            w.v = ip->pc.st[ip->phase].v_mm_s;
+            if (ip->phase == 8u || ip->phase == 16u) { /* the end of the ramp: the horizon, as verified */
+                w.blk = ip->hz_blk;
+                w.off = ip->hz_off;
+                w.v = ip->hz_v;
+            } else { /* the start of a ramp: ds beyond the last sample */
+                ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off);
+                w.v = CUR(ip).st[ip->phase].v_mm_s;
+            }
             const lsm_interp_prep *q = piece_for(ip, &w);
-            if (q != NULL && q->pc.T_s > R0) {
+            if ((q == NULL || !(NXT(ip).T_s > R0)) && ip->pl->piece_stale) {
+                /* the geometry the current piece runs into has changed: a new piece must start here (planned
+                 * normally: a verified one, or at worst a verified stop) */
+                w.mode = LSM_PIECE_NORMAL;
+                q = piece_for(ip, &w);
+            }
+            if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
                 advance_path(ip, ds);
@@ -605,14 +639,14 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         if (!ended) {
             advance_path(ip, ds);
             if (is_ramp_phase(ip->phase))
-                lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v);
+                lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             else
-                lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s);
+                lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             return;
         }
         const uint32_t ended_serial = ip->serial;
         end_piece(ip);
-        if (ip->pc.stop || !(left > R0))
+        if (CUR(ip).stop || !(left > R0))
             return;
         /* the next piece starts inside this cycle: take it (or plan it) and sample it at the rest of the cycle */
         swpt w;
@@ -627,7 +661,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         ip->serial = ended_serial; /* (end_piece does not change it: the successor follows this piece) */
         const lsm_interp_prep *q = piece_for(ip, &w);
         ip->serial = cur;
-        if (q == NULL || !(q->pc.T_s > R0))
+        if (q == NULL || !(NXT(ip).T_s > R0))
             return;
         take(ip, q, left, false);
         adv = left;
@@ -685,7 +719,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
                 ip->state = LSM_INTERP_HELD; /* a hold at rest */
             } else if (next_switch(ip, &w)) {
                 const lsm_interp_prep *q = piece_for(ip, &w);
-                if (q != NULL && q->pc.T_s > R0)
+                if (q != NULL && NXT(ip).T_s > R0)
                     take(ip, q, dt, false);
                 else if (!path_ahead(ip))
                     ip->state = pl->finished ? LSM_INTERP_DONE : LSM_INTERP_IDLE;
@@ -700,7 +734,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
         if (q->ready && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial && q->cycle == ip->cycles &&
             q->gen == pl->gen) {
             take(ip, q, dt, true);
-        } else if (!ip->bg && at_a_zero(ip) && !ip->pc.hold && (ip->hold_req || ip->gen != pl->gen)) {
+        } else if (at_a_zero(ip) && !CUR(ip).hold &&
+                   (pl->piece_stale || (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
             swpt w;
             memset(&w, 0, sizeof w);
             w.kind = LSM_INTERP_SW_SAMPLE;
@@ -710,6 +745,10 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             w.off = ip->off_mm;
             w.v = ip->v_mm_s;
             q = piece_for(ip, &w);
+            if ((q == NULL || !(NXT(ip).T_s > R0)) && pl->piece_stale) { /* must be replaced here (see run_cycle) */
+                w.mode = LSM_PIECE_NORMAL;
+                q = piece_for(ip, &w);
+            }
             if (q != NULL)
                 take(ip, q, dt, true);
             else if (is_cruise(ip->phase) && w.mode == LSM_PIECE_REPLAN)
@@ -719,7 +758,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             run_cycle(ip, dt);
     }
     if (!ip->running) /* at rest (or stopped for good): the machine stands here */
-        lsm_planner_set_horizon(pl, ip->blk, ip->off_mm, R0);
+        lsm_planner_set_horizon(pl, ip->blk, ip->off_mm, R0, ip->blk, R0);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pos[i] = ip->pos[i];
     return (lsm_interp_state)ip->state;

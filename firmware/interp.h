@@ -71,9 +71,9 @@ typedef enum lsm_interp_switch {
     LSM_INTERP_SW_REST = 3      /* at rest: the next piece from the cursor */
 } lsm_interp_switch;
 
-/* A piece planned ahead (lsm_interp_prepare) and the switch point it starts at. */
+/* A piece planned ahead (lsm_interp_prepare), which lives in the interpolator's second piece buffer, and the switch
+ * point it starts at. */
 typedef struct lsm_interp_prep {
-    lsm_piece pc;
     uint64_t cycle;       /* SW_SAMPLE: the cycle count it starts at */
     uint32_t serial;      /* the piece it follows or replaces (SW_SAMPLE, SW_BOUNDARY); the last piece (SW_REST) */
     uint32_t gen;         /* planner generation it was planned for */
@@ -82,7 +82,7 @@ typedef struct lsm_interp_prep {
     lsm_real v_mm_s;
     uint8_t kind;         /* lsm_interp_switch */
     uint8_t phase;        /* SW_BOUNDARY */
-    uint8_t ready;        /* pc holds the piece */
+    uint8_t ready;        /* the second piece buffer holds the piece */
     uint8_t failed;       /* no piece fits at this switch point for this generation (do not try again) */
     uint8_t mode;         /* lsm_piece_mode it was planned with */
     uint8_t reserved[3];
@@ -90,7 +90,9 @@ typedef struct lsm_interp_prep {
 
 typedef struct lsm_interp {
     lsm_planner *pl;
-    lsm_piece pc;                /* the piece being run */
+    lsm_piece pcs[2];            /* the piece being run (pcs[cur]) and the one planned ahead (the other): taking the
+                                    prepared piece swaps them, no copy in the control cycle */
+    uint8_t cur;
     uint8_t running;             /* pc is valid */
     uint8_t state;               /* lsm_interp_state */
     uint8_t hold_req;            /* feed hold requested (or 0 % override) */

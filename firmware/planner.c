@@ -423,7 +423,10 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 }
 
 static void backward_pass(lsm_planner *pl);
-static bool horizon_feasible(lsm_planner *pl);
+static bool horizon_feasible(lsm_planner *pl, bool force);
+static bool commitment_kept(const lsm_planner *pl);
+static bool arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v);
+static uint32_t node_after(const lsm_planner *pl, uint32_t after, lsm_real *w);
 
 /* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
 static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
@@ -528,7 +531,12 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     }
     pl->gen++;
     backward_pass(pl);
-    if (has_prev && !(flags & LSM_PB_STOP) && !horizon_feasible(pl)) {
+    /* a corner that trimmed the block the interpolator's current piece ends in (it runs to the end of the buffer):
+     * a verified piece from its commitment point must exist (it will be taken there) */
+    const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) || pl->piece_stale ||
+                        !commitment_kept(pl);
+    /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
+    if (has_prev && !(flags & LSM_PB_STOP) && stales && !horizon_feasible(pl, true)) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
          * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
         pl->tail -= corner ? 3u : 1u;
@@ -542,6 +550,8 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         pl->stats.horizon_stops++;
         pl->full_pass = 1;
         backward_pass(pl);
+    } else if (stales) {
+        pl->piece_stale = 1;
     }
     return LSM_OK;
 }
@@ -825,13 +835,29 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
     return LSM_OK;
 }
 
-void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s)
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+                             lsm_real end_v_mm_s)
 {
     if (pl == NULL)
         return;
     pl->horizon_blk = id;
     pl->horizon_off = off_mm;
     pl->horizon_v = v_mm_s > R0 ? v_mm_s : R0;
+    pl->horizon_end = end_blk;
+    pl->horizon_end_v = end_v_mm_s > R0 ? end_v_mm_s : R0;
+}
+
+/* Does the interpolator's current piece still end where it may go on (planner.h, lsm_planner_set_horizon)? */
+static bool commitment_kept(const lsm_planner *pl)
+{
+    const uint32_t e = pl->horizon_end;
+    if (!(pl->horizon_v > R0) || !(pl->horizon_end_v > R0) || id_lt(e, pl->head) || !id_lt(e, pl->tail))
+        return true;
+    if (blk(pl, e)->flags & LSM_PB_STOP)
+        return false;
+    /* verified afresh, not read from the node's W: valleys move when blocks are appended (a node can vanish, or the
+     * one after it change), and an incremental backward pass that stopped early does not revisit it */
+    return arrival_ok((lsm_planner *)pl, e, pl->horizon_end_v);
 }
 
 void lsm_planner_release(lsm_planner *pl, uint32_t id)
@@ -1455,7 +1481,11 @@ static lsm_real cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a
     return lo;
 }
 
-/* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact). */
+/* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact): a bisection
+ * between the speed that can cruise through the piece (or 0 before an exact stop) and c0. Feasibility is not
+ * strictly monotone in the speed near the caps (whole-cycle ramps against budgets that vanish at the cap), so a W
+ * may move either way when w1 changes: the interpolator's commitment is checked after every append
+ * (commitment_kept). */
 static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w1, bool exact)
 {
     pl->stats.bp_nodes++;
@@ -1474,17 +1504,8 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     lsm_real xs;
     if (hi <= w1 ? region_ok(&pc, R0, D, hi) : fit_decel(&pc, R0, D, hi, w1, exact, true, &r, &xs))
         return hi;
-    /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
-     * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
-    lsm_real ga, gj, gs;
-    guess_limits(&pc, D, &ga, &gj, &gs);
-    lsm_real probe = speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
-    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
-        lsm_real mid = (lo + hi) / LSM_R(2.0);
-        if (probe > lo && probe < hi) {
-            mid = probe;
-            probe = R0;
-        }
+    for (int it = 0; it < W_BISECT; it++) {
+        const lsm_real mid = (lo + hi) / LSM_R(2.0);
         const bool ok = mid <= w1 ? region_ok(&pc, R0, D, mid) : fit_decel(&pc, R0, D, mid, w1, exact, true, &r, &xs);
         if (ok)
             lo = mid;
@@ -1492,6 +1513,31 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
             hi = mid;
     }
     return lo;
+}
+
+/* The test of node_w for speed v at node id: one verified ramp from v reaches w1 by the next node id_end (exactly
+ * if exact), or a cruise at v goes through. */
+static bool cert_ok(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real v, lsm_real w1, bool exact)
+{
+    pctx pc;
+    pctx_init(&pc, pl, id, R0, id_end);
+    if (!(pc.D > LEN_EPS * (R1 + pc.D)))
+        return v <= w1;
+    ramp r;
+    lsm_real xs;
+    return v <= w1 ? region_ok(&pc, R0, pc.D, v) : fit_decel(&pc, R0, pc.D, v, w1, exact, true, &r, &xs);
+}
+
+/* Can a piece that arrives at node `id` (a = 0) at speed v go on? The test of node_w: one verified ramp from v
+ * reaches the next node's W (or a cruise at v goes through). A piece that arrives below the node's W needs this:
+ * W itself was verified, but whole-cycle ramps make the lower speeds not always so. */
+static bool arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v)
+{
+    if (!(v > R0) || id == pl->tail || !id_lt(id, pl->tail) || (blk(pl, id)->flags & LSM_PB_STOP))
+        return true;
+    lsm_real w2;
+    const uint32_t n2 = node_after(pl, id, &w2);
+    return cert_ok(pl, id, n2, v, w2, !(w2 > R0));
 }
 
 /* Valley detection while walking backwards (see planner.h: nodes at valleys and significant drops). */
@@ -1557,7 +1603,9 @@ static int vstep(vstate *s, uint32_t id, lsm_real c, lsm_real h, lsm_real drop, 
 static lsm_real min_cap_ahead(const lsm_planner *pl, uint32_t id, lsm_real d)
 {
     lsm_real m = cap_of(pl, id), x = blk(pl, id)->g.len;
-    for (uint32_t q = id + 1u; q != pl->tail && x < d; q++) {
+    /* (not across an exact stop: what comes after one never moves the nodes before it, so that a junction made an
+     * exact stop restores the plan before it exactly) */
+    for (uint32_t q = id + 1u; q != pl->tail && x < d && !(blk(pl, q)->flags & LSM_PB_STOP); q++) {
         m = lsm_min2(m, cap_of(pl, q));
         x += blk(pl, q)->g.len;
     }
@@ -1614,10 +1662,12 @@ static void backward_pass(lsm_planner *pl)
         /* a node at `node` (node >= k) */
         lsm_pblock *nb = blk(pl, node);
         lsm_real w = (nb->flags & LSM_PB_STOP) ? R0 : node_w(pl, node, n_id, n_w, n_exact);
-        /* unchanged, or higher by less than the searches resolve: the old W stays (a W only rises when blocks are
-         * appended behind it, and a lower one is still certified), and so does everything before it */
+        /* unchanged, or higher by less than the searches resolve and the old W still certified against the node
+         * after it (feasibility is not strictly monotone in the speed, so a lower W is not certified by a higher
+         * one): the old W stays, and so does everything before it */
         const bool was = (nb->flags & LSM_PB_NODE) != 0 && !pl->full_pass;
-        const bool same = was && (nb->w_mm_s == w || (w > nb->w_mm_s && w <= nb->w_mm_s * (R1 + SPEED_RES)));
+        const bool same = was && (nb->w_mm_s == w || (w > nb->w_mm_s && w <= nb->w_mm_s * (R1 + SPEED_RES) &&
+                                                      cert_ok(pl, node, n_id, nb->w_mm_s, n_w, n_exact)));
         if (same)
             w = nb->w_mm_s;
         nb->flags |= LSM_PB_NODE;
@@ -1690,10 +1740,12 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
             pl->full_pass = 1;
             pl->gen++;
             backward_pass(pl);
-            if (id == pl->tail || horizon_feasible(pl))
+            if (id == pl->tail || horizon_feasible(pl, false))
                 break;
             need = LSM_R(2.0) * need + blk(pl, cur)->g.len;
         }
+        if (!commitment_kept(pl))
+            pl->piece_stale = 1; /* (the loop verified a piece from the horizon) */
         return LSM_OK;
     }
     pl->full_pass = 1;
@@ -2008,7 +2060,15 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
     memset(&p, 0, sizeof p);
     memset(&best, 0, sizeof best);
     lsm_real v1 = R0;
-    bool skipped_here = false;
+    bool skipped_here = false, skipped_short = false;
+    /* pass 0 also plans across a valley node closer than 1.5 cycles of travel (a piece that short would start and
+     * end inside one control cycle, too soon for the next one to be planned in the background); pass 1, only
+     * if that found nothing, stops there as well */
+    for (int pass = 0; pass < 2 && !have; pass++) {
+    if (pass == 1 && !skipped_short)
+        break;
+    id_end = id0;
+    skipped_here = false;
     for (int cand = 0; cand < 5 && !have; cand++) {
         if (id_end == pl->tail || (cand > 0 && !skipped_here && (blk(pl, id_end)->flags & LSM_PB_STOP)))
             break;
@@ -2017,6 +2077,12 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
         skipped_here = false;
         if (!(pc.D > LEN_EPS * (R1 + pc.D))) { /* a node right here (we stand on it): the next one */
             skipped_here = true;
+            continue;
+        }
+        if (pass == 0 && id_end != pl->tail && !(blk(pl, id_end)->flags & LSM_PB_STOP) &&
+            pc.D < LSM_R(1.5) * pl->cfg.cycle_s * lsm_max2(v0, w1)) {
+            skipped_here = true;
+            skipped_short = true;
             continue;
         }
         exact = !(w1 > R0);
@@ -2046,6 +2112,18 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
                 v1 = lo;
             }
         }
+        if (!catchup && v1 > R0 && v1 < w1 && !arrival_ok(pl, id_end, v1)) {
+            /* arriving below the node's W: at a speed from which the machine can go on (verified like W) */
+            lsm_real lo = R0, hi = v1;
+            for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+                const lsm_real mid = (lo + hi) / LSM_R(2.0);
+                if (arrival_ok(pl, id_end, mid))
+                    lo = mid;
+                else
+                    hi = mid;
+            }
+            v1 = lo;
+        }
         if (catchup) {
             /* slow down at once towards the cap here, then cruise and go on */
             lsm_real vt = lsm_max2(v1, lsm_min2(v0, range_cap(&pc, R0, pc.D)));
@@ -2063,18 +2141,41 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
         if (lo > R0 && feas5(&pc, v0, lo, v1, exact, false, &p)) {
             best = p;
             have = true;
-        } else if (v0 > v1) {
-            /* caps below v0 inside the piece (dips that are not nodes): slow down at once to a cruise below them */
-            lsm_real l = v1, u = v0;
+        } else if (v0 > v1 || lo > R0) {
+            /* caps below v0 inside the piece (dips that are not nodes): slow down at once to a cruise below them,
+             * arriving at the node below its W when the dip is lower than that (W is only the highest speed) */
+            lsm_real l = R0, u = lo;
             for (int it = 0; it < VC_BISECT + 8 && u - l > SPEED_RES * u; it++) {
                 const lsm_real mid = (l + u) / LSM_R(2.0);
-                if (mid > R0 && feas5(&pc, v0, mid, v1, exact, true, &p)) {
+                if (mid > R0 && feas5(&pc, v0, mid, lsm_min2(v1, mid), exact, true, &p) &&
+                    (mid >= v1 || arrival_ok(pl, id_end, mid))) {
                     best = p;
                     have = true;
                     l = mid;
                 } else {
                     u = mid;
                 }
+            }
+        }
+        if (!have && off0 == R0 && v0 > R0) {
+            /* the piece the node's certificate verified (node_w, arrival_ok): one ramp from v0 down to the next
+             * node's W, or a cruise at v0, so that a speed certified at a node always goes on */
+            ramp r;
+            lsm_real xs;
+            memset(&p, 0, sizeof p);
+            p.v0 = p.vc = v0;
+            no_ramp(&p.A, pl->cfg.cycle_s, v0);
+            if (v0 > v1 ? fit_decel(&pc, R0, pc.D, v0, v1, exact, true, &r, &xs) : region_ok(&pc, R0, pc.D, v0)) {
+                p.v1 = v0 > v1 ? v1 : v0;
+                if (v0 > v1) {
+                    p.B = r;
+                    p.xB = xs;
+                } else {
+                    no_ramp(&p.B, pl->cfg.cycle_s, v0);
+                    p.xB = pc.D;
+                }
+                best = p;
+                have = true;
             }
         }
         lsm_real mx = R0;
@@ -2105,6 +2206,7 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
             }
         }
     }
+    }
     if (have && !catchup)
         staircase(&pc, &best);
     *pcp = pc;
@@ -2113,16 +2215,17 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
     return have;
 }
 
-/* After a corner trimmed the last block: does a verified piece still start at the interpolator's commitment
- * point (planner.h, lsm_planner_set_horizon)? The backward pass that stopped at an unchanged node after that
- * point left the piece from there unchanged: nothing to check. */
-static bool horizon_feasible(lsm_planner *pl)
+/* Does a verified piece start at the interpolator's commitment point (planner.h, lsm_planner_set_horizon)?
+ * Unless `force`, a backward pass that stopped at an unchanged node after that point left the piece from there
+ * unchanged: nothing to check. (After a corner trimmed the block the current piece ends in, the piece from there
+ * is always checked: that piece must be replaced.) */
+static bool horizon_feasible(lsm_planner *pl, bool force)
 {
     uint32_t id = pl->horizon_blk;
     lsm_real off = pl->horizon_off;
     if (!(pl->horizon_v > R0) || id_lt(id, pl->head) || !id_lt(id, pl->tail))
         return true;
-    if (id_lt(id, pl->bp_stop))
+    if (!force && id_lt(id, pl->bp_stop))
         return true;
     while (off > blk(pl, id)->g.len && id + 1u != pl->tail) {
         off -= blk(pl, id)->g.len;

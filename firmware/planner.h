@@ -220,6 +220,12 @@ typedef struct lsm_planner {
     uint32_t horizon_blk;       /* the interpolator is committed up to here (block id, offset), where it will */
     lsm_real horizon_off;       /* be able to re-plan (a = 0) at speed horizon_v */
     lsm_real horizon_v;
+    uint32_t horizon_end;       /* its current piece ends at the start of this block (the tail: the buffer's end) */
+    lsm_real horizon_end_v;     /* at this speed (a = 0): the W of that node must stay at least this */
+    uint8_t piece_stale;        /* a corner trimmed the block the current piece ends in: a new piece must start at
+                                   the horizon (appends verified that one exists there); cleared by the
+                                   interpolator when it takes one */
+    uint8_t reserved3[3];
     uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */
     uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
     /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */
@@ -304,10 +310,13 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm
                                   lsm_piece_mode mode, lsm_piece *out);
 
 /* The interpolator is committed up to (blk, off_mm), the first point where it can take a new piece (a = 0), at
- * speed v_mm_s there: the planner modifies nothing before that point, and a corner transition that trims the last
- * block is only kept if a verified piece from that point at that speed still exists (else the corner becomes an
- * exact stop). */
-void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s);
+ * speed v_mm_s there, and its current piece ends at the start of block end_blk (the tail: the end of the buffer)
+ * at speed end_v_mm_s. The planner modifies nothing before that point. An append that invalidates the current
+ * piece (a corner that trims the block it ends in, or a W of its end node that falls below end_v_mm_s) is only kept
+ * if a verified piece from (blk, off_mm) at v_mm_s exists (else the junction becomes an exact stop, which restores
+ * the previous plan), and then sets piece_stale: the interpolator must take a new piece there. */
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+                             lsm_real end_v_mm_s);
 
 /* Blocks before id `blk` are no longer needed (their slots are freed). */
 void lsm_planner_release(lsm_planner *pl, uint32_t blk);

@@ -8,7 +8,9 @@
  * For every case: duration of each planner, their ratio (lissom / vpop), for each the largest axis velocity,
  * acceleration and jerk as a ratio to the axis limit (backward differences, Beudaert eq 6), host ns per appended
  * block (lissom planner) and per cycle (lissom interpolator; for vpop the planning time per setpoint), and vpop's
- * total planning time. Cases: the trident polyline on the Beudaert Table 1 machine, the circle of 0.1 mm chords,
+ * total planning time, lissom's background piece planning per piece (lsm_interp_prepare), and the continuous axis
+ * jerk that vpop's motion asks between its samples (largest and 99th percentile over the samples, as a ratio to the
+ * limit: VPOp holds the limit at the samples only, the real-time planner everywhere; pathrun.h). Cases: the trident polyline on the Beudaert Table 1 machine, the circle of 0.1 mm chords,
  * the pocket and the 3-D surface on the router, and the trident on the B-spline itself (vpop only: Beudaert
  * section 3.1, programmed feed and control points from host_sim/examples/trident_bspline.json), with the switching
  * step refined (SIM_VPOP_REFINE, as `run --planner vpop`) and, as trident-bspline-0, without (the paper's rule).
@@ -48,6 +50,8 @@ typedef struct bp_row {
     double rv[2], ra[2], rj[2]; /* largest axis v/a/j over its limit */
     double ns_block, ns_cycle;  /* lissom planner / interpolator */
     double vpop_ns_cycle, vpop_s;
+    double ns_piece;            /* lissom: background piece planning (lsm_interp_prepare) per piece */
+    double isj_max, isj_p99;    /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
 } bp_row;
 
 static double bp_now(void)
@@ -110,9 +114,12 @@ static int bp_program(const char *root, const bp_case *c, bp_row *row)
         if (k == 0) {
             row->ns_block = r.plan_ns_per_block;
             row->ns_cycle = r.interp_ns_per_cycle;
+            row->ns_piece = r.prepare_ns_per_piece;
         } else {
             row->vpop_ns_cycle = r.interp_ns_per_cycle;
             row->vpop_s = wall;
+            row->isj_max = r.intersample_jerk_max;
+            row->isj_p99 = r.intersample_jerk_p99;
         }
         sim_run_free(&r);
     }
@@ -192,6 +199,7 @@ static int bp_bspline(const char *root, int refine, const char *out, bp_row *row
     bp_ratios(&m2, v, a, j, &row->rv[1], &row->ra[1], &row->rj[1]);
     row->vpop_s = wall;
     row->vpop_ns_cycle = n ? 1e9 * wall / (double)n : 0;
+    row->isj_max = row->isj_p99 = -1; /* (not measured on the spline) */
     free(S);
     sim_bspline_free(&b);
     return 0;
@@ -272,6 +280,8 @@ int cmd_bench_planner(int argc, char **argv)
                 json_num(stdout, r->ns_block);
                 printf(", \"ns_per_cycle\": ");
                 json_num(stdout, r->ns_cycle);
+                printf(", \"ns_per_piece\": ");
+                json_num(stdout, r->ns_piece);
                 printf("}");
             }
             printf(", \"vpop\": {\"duration\": ");
@@ -286,6 +296,13 @@ int cmd_bench_planner(int argc, char **argv)
             json_num(stdout, r->vpop_ns_cycle);
             printf(", \"planning_s\": ");
             json_num(stdout, r->vpop_s);
+            if (r->isj_max >= 0) {
+                printf(", \"intersample_jerk_ratio\": {\"max\": ");
+                json_num(stdout, r->isj_max);
+                printf(", \"p99\": ");
+                json_num(stdout, r->isj_p99);
+                printf("}");
+            }
             printf("}");
             if (r->has_lissom) {
                 printf(", \"ratio\": ");
@@ -296,17 +313,22 @@ int cmd_bench_planner(int argc, char **argv)
         printf("\n  ]\n}\n");
         return 0;
     }
-    printf("%-16s %9s %9s %6s  %-17s  %-17s  %9s %9s %9s\n", "case", "lissom s", "vpop s", "ratio",
-           "lissom v/a/j", "vpop v/a/j", "ns/block", "ns/cycle", "vpop s");
+    printf("%-16s %9s %9s %6s  %-17s  %-17s  %11s  %9s %9s %10s %9s\n", "case", "lissom s", "vpop s", "ratio",
+           "lissom v/a/j", "vpop v/a/j", "vpop isj", "ns/block", "ns/cycle", "ns/piece", "vpop s");
     for (int i = 0; i < nr; i++) {
         const bp_row *r = &rows[i];
+        char isj[32] = "-";
+        if (r->isj_max >= 0)
+            snprintf(isj, sizeof isj, "%.2f/%.2f", r->isj_max, r->isj_p99);
         if (r->has_lissom)
-            printf("%-16s %9.3f %9.3f %6.3f  %5.3f/%5.3f/%5.3f  %5.3f/%5.3f/%5.3f  %9.0f %9.0f %9.3f\n", r->name,
-                   r->dur[0], r->dur[1], r->dur[0] / r->dur[1], r->rv[0], r->ra[0], r->rj[0], r->rv[1], r->ra[1],
-                   r->rj[1], r->ns_block, r->ns_cycle, r->vpop_s);
+            printf("%-16s %9.3f %9.3f %6.3f  %5.3f/%5.3f/%5.3f  %5.3f/%5.3f/%5.3f  %11s  %9.0f %9.0f %10.0f %9.3f\n",
+                   r->name, r->dur[0], r->dur[1], r->dur[0] / r->dur[1], r->rv[0], r->ra[0], r->rj[0], r->rv[1],
+                   r->ra[1], r->rj[1], isj, r->ns_block, r->ns_cycle, r->ns_piece, r->vpop_s);
         else
-            printf("%-16s %9s %9.3f %6s  %17s  %5.3f/%5.3f/%5.3f  %9s %9s %9.3f\n", r->name, "-", r->dur[1], "-", "-",
-                   r->rv[1], r->ra[1], r->rj[1], "-", "-", r->vpop_s);
+            printf("%-16s %9s %9.3f %6s  %17s  %5.3f/%5.3f/%5.3f  %11s  %9s %9s %10s %9.3f\n", r->name, "-", r->dur[1],
+                   "-", "-", r->rv[1], r->ra[1], r->rj[1], isj, "-", "-", "-", r->vpop_s);
     }
+    printf("\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
+           "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n");
     return 0;
 }

@@ -85,6 +85,13 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         fprintf(f, "}");
     }
     fprintf(f, "\n  ],\n  \"within_limits\": %s,\n", within ? "true" : "false");
+    if (r->intersample_jerk_max >= 0) {
+        fprintf(f, "  \"intersample_jerk_ratio\": {\"max\": ");
+        json_num(f, r->intersample_jerk_max);
+        fprintf(f, ", \"p99\": ");
+        json_num(f, r->intersample_jerk_p99);
+        fprintf(f, "},\n");
+    }
     fprintf(f, "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "
                "\"pieces\": %u, \"replans\": %u, \"fallbacks\": %u, \"plan_errors\": %u, \"ramp_checks\": %u, "
                "\"block_bytes\": %u, \"append_ns_per_block\": ",

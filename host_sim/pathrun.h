@@ -84,6 +84,8 @@ typedef struct sim_run_result {
     uint32_t prepared;         /* pieces planned in the background (lsm_interp_prepare) */
     uint32_t tick_plans;       /* pieces planned inside the control cycle (none prepared in time) */
     uint32_t pl_block_bytes;   /* sizeof(lsm_pblock) of this build */
+    double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
+    double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
     char err[320];
 } sim_run_result;
 

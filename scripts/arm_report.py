@@ -106,18 +106,20 @@ def main(argv):
       "(instructions = 40 x SysTick counts, harness subtracted), 128-block look-ahead, 1 ms cycle. "
       "Instructions, not clock cycles. Regenerate: `scripts/arm_report.sh`.")
     p("")
-    p("**Interpolator, per control cycle** (`lsm_interp_step`). A cycle that reaches the end of a piece calls "
-      "`lsm_planner_plan_piece` (the forward step of the look-ahead) inside the cycle; those cycles are counted "
-      "apart. Worst single cycles are read one by one (±40).")
+    p("**Interpolator, per control cycle** (`lsm_interp_step`). Pieces are planned between cycles by "
+      "`lsm_interp_prepare` (background work, below); a cycle only evaluates, and takes a prepared piece where "
+      "it starts. A cycle that finds none prepared plans it itself: those cycles are counted apart (the last "
+      "column; 0 means the cycle never planned). Worst single cycles are read one by one (±40).")
     p("")
-    p("| block | axes | mean, cycles without planning | worst, without planning | mean, all cycles | "
-      "worst cycle (plans a piece) | cycles (planning) |")
-    p("|---|---:|---:|---:|---:|---:|---:|")
+    at = {"block_entry": " (block entry)", "piece_switch": " (piece switch)",
+          "block_entry_and_piece": " (block entry and piece switch)"}
+    p("| block | axes | mean | worst cycle | cycles (of which planned a piece) |")
+    p("|---|---:|---:|---:|---:|")
     for kind, axes in (("line", 1), ("line", 3), ("line", 6), ("arc", 3), ("arc", 6), ("clothoid", 3),
                        ("clothoid", 6)):
         a, q = b(f"interp_{kind}_{axes}ax"), b(f"interp_{kind}_{axes}ax_noplan")
-        entry = " (block entry)" if q.get("max_at") == "block_entry" else ""
-        p(f"| {kind} | {axes} | {n(q['value'])} | {n(int(q['max']))}{entry} | {n(a['value'])} | {n(int(a['max']))} | "
+        where = at.get(q.get("max_at"), "") if a["calls"] == q["calls"] else " (plans a piece)"
+        p(f"| {kind} | {axes} | {n(a['value'])} | {n(int(a['max']))}{where} | "
           f"{a['calls']} ({int(a['calls']) - int(q['calls'])}) |")
     p("")
     p("1 axis: X lines (collinear joins, reversals); 3 axes: the contour program (`firmware/port/contour`); "
@@ -168,8 +170,8 @@ def main(argv):
     if "clothoid_step" in bench:
         p(f"| `lsm_clothoid_step` (the clothoid stepper alone, 0.1 mm steps) | {n(b('clothoid_step')['value'])} | "
           f"| {b('clothoid_step')['calls']} |")
-    p(f"| `lsm_planner_plan_piece` (per piece, runs inside a cycle) | {n(pp['value'])} | {n(int(pp['max']))} | "
-      f"{pp['calls']} |")
+    p(f"| `lsm_planner_plan_piece` (per piece: background work of `lsm_interp_prepare`) | {n(pp['value'])} | "
+      f"{n(int(pp['max']))} | {pp['calls']} |")
     p(f"| full backward pass, {note.get('full_pass_blocks', '?')} blocks (`full_pass`, `lsm_planner_update`) | "
       f"{n(fp['value'])} | | 1 |")
     p("")
@@ -212,10 +214,10 @@ def main(argv):
     p("|---|---|---|")
     for kind in ("arc", "clothoid"):
         q, a = b(f"interp_{kind}_3ax_noplan"), b(f"interp_{kind}_3ax")
-        p(f"| <= {GOAL_CYCLE} instructions per cycle, 3 axes, {kind} | mean {n(q['value'])}, worst "
-          f"{n(int(q['max']))} without planning | {status(q['value'], GOAL_CYCLE)} (mean) |")
-        p(f"| ... counting the cycles that plan a piece | mean {n(a['value'])}, worst {n(int(a['max']))} | "
-          f"{status(a['value'], GOAL_CYCLE)} (mean), worst x{int(a['max']) / GOAL_CYCLE:.0f} |")
+        planned = int(a["calls"]) - int(q["calls"])
+        p(f"| <= {GOAL_CYCLE} instructions per cycle, 3 axes, {kind} | mean {n(a['value'])}, worst "
+          f"{n(int(a['max']))} ({planned} cycles planned a piece) | {status(a['value'], GOAL_CYCLE)} (mean), "
+          f"worst x{int(a['max']) / GOAL_CYCLE:.1f} |")
     p(f"| <= {n(GOAL_APPEND)} instructions per appended block | mean {n(ap['value'])}, worst {n(wmax)} | "
       f"{status(ap['value'], GOAL_APPEND)} (mean) |")
     p(f"| <= {GOAL_BLOCK_RAM} B RAM per block | {size.get('lsm_pblock', '?')} B | "

@@ -2,10 +2,12 @@
  * bench_planner.c: instruction counts of the look-ahead planner and the interpolator (part of lissom-bench.elf,
  * method in bench_main.c: SysTick x 40 under -icount shift=0). Every figure uses a 128-block look-ahead.
  *
- * Per control cycle (lsm_interp_step), for 1, 3 and 6 configured axes, classified by the kind of block the path
- * cursor is on after the cycle (line, arc, clothoid):
- *   interp_<kind>_<n>ax           every cycle: mean, and the largest single cycle (a cycle that plans a piece)
- *   interp_<kind>_<n>ax_noplan    the cycles that did not plan a piece (lsm_planner_plan_piece): mean and largest
+ * Per control cycle (lsm_interp_step, with lsm_interp_prepare called between cycles and not counted), for 1, 3
+ * and 6 configured axes, classified by the kind of block the path cursor is on after the cycle (line, arc,
+ * clothoid):
+ *   interp_<kind>_<n>ax           every cycle: mean, and the largest single cycle
+ *   interp_<kind>_<n>ax_noplan    the cycles that did not plan a piece themselves (lsm_planner_plan_piece inside
+ *                                 the cycle: none was prepared): mean and largest, with where the largest was
  * Programs: 1 axis: X lines (collinear joins and reversals); 3 axes: the contour program (contour_prog.h: lines,
  * arcs, a helix, a dense polyline fitted with arcs, clothoid corners); 6 axes: the same contour with A B C
  * configured (they do not move: arcs and corner blends are X Y Z only) for arcs and clothoids, and lines that move
@@ -19,8 +21,8 @@
  * modules (linker --wrap, see CMakeLists.txt): lsm_corner_smooth, lsm_arcfit_fit; the rest is validation, block
  * set-up (bounds, coefficients) and the backward pass. Built with BENCH_RAMP_WRAP (lissom-bench-ramp.elf) it also
  * times the ramp sizing and phase evaluation inside the appends. Also: one full backward pass over the full
- * buffer (full_pass = 1, lsm_planner_update), lsm_planner_plan_piece per piece (the forward step, which the
- * interpolator calls inside a cycle), and lsm_clothoid_step alone.
+ * buffer (full_pass = 1, lsm_planner_update), lsm_planner_plan_piece per piece (the forward step, which
+ * lsm_interp_prepare calls between cycles), and lsm_clothoid_step alone.
  * Short timed windows start after dither() so that they sample every phase of the 40-instruction SysTick count.
  */
 #include <string.h>
@@ -362,7 +364,8 @@ typedef struct kstat {
     uint32_t n, n_noplan;
     uint64_t counts, counts_noplan;
     uint32_t max_counts, max_noplan;
-    uint8_t max_noplan_entry; /* the largest cycle without planning entered a new block */
+    uint8_t max_noplan_entry; /* the largest cycle without planning entered a new block (1), started a new piece (2),
+                                 both (3) */
 } kstat;
 
 static uint32_t mean_x100(uint64_t counts, uint32_t n, uint32_t ovh_x100)
@@ -420,7 +423,10 @@ static void out_kind(const char *kind, unsigned n_axes, const kstat *k)
     *p = '\0';
     out_line(name, mean_x100(k->counts_noplan, k->n_noplan, g_step_ovh_x100), "cycle", k->n_noplan,
              max_insns(k->max_noplan, g_step_ovh_x100),
-             k->max_noplan_entry ? "max_at=block_entry" : "max_at=inside_block");
+             k->max_noplan_entry == 3u   ? "max_at=block_entry_and_piece"
+             : k->max_noplan_entry == 2u ? "max_at=piece_switch"
+             : k->max_noplan_entry == 1u ? "max_at=block_entry"
+                                         : "max_at=inside_block");
 }
 
 typedef struct astat {
@@ -506,7 +512,7 @@ static bool run(const char *name, gen_fn next, uint8_t axis_mask, kstat ks[4], a
         if (!have && !finished && lsm_planner_finish(&g_pl) == LSM_OK)
             finished = true;
         (void)lsm_interp_prepare(&g_ip); /* background planning (not part of the cycle's count) */
-        const uint32_t pieces0 = g_w_piece.calls, blk0 = g_ip.blk;
+        const uint32_t pieces0 = g_w_piece.calls, blk0 = g_ip.blk, serial0 = g_ip.serial;
         lsm_interp_state s;
         dither(cyc);
         const uint32_t c = timed_step(lsm_interp_step, pos, &s);
@@ -522,7 +528,7 @@ static bool run(const char *name, gen_fn next, uint8_t axis_mask, kstat ks[4], a
                 k->counts_noplan += c;
                 if (c > k->max_noplan) {
                     k->max_noplan = c;
-                    k->max_noplan_entry = g_ip.blk != blk0;
+                    k->max_noplan_entry = (uint8_t)((g_ip.blk != blk0 ? 1u : 0u) | (g_ip.serial != serial0 ? 2u : 0u));
                 }
             }
         }

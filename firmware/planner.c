@@ -424,7 +424,7 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 
 static void backward_pass(lsm_planner *pl);
 static bool horizon_feasible(lsm_planner *pl, bool force);
-static bool commitment_kept(const lsm_planner *pl);
+static bool commitment_kept(lsm_planner *pl);
 static bool arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v);
 static uint32_t node_after(const lsm_planner *pl, uint32_t after, lsm_real *w);
 
@@ -843,21 +843,33 @@ void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_
     pl->horizon_blk = id;
     pl->horizon_off = off_mm;
     pl->horizon_v = v_mm_s > R0 ? v_mm_s : R0;
+    const lsm_real ev = end_v_mm_s > R0 ? end_v_mm_s : R0;
+    if (end_blk != pl->horizon_end || ev != pl->horizon_end_v)
+        pl->commit_dirty = 1;
     pl->horizon_end = end_blk;
-    pl->horizon_end_v = end_v_mm_s > R0 ? end_v_mm_s : R0;
+    pl->horizon_end_v = ev;
 }
 
 /* Does the interpolator's current piece still end where it may go on (planner.h, lsm_planner_set_horizon)? */
-static bool commitment_kept(const lsm_planner *pl)
+static bool commitment_kept(lsm_planner *pl)
 {
     const uint32_t e = pl->horizon_end;
     if (!(pl->horizon_v > R0) || !(pl->horizon_end_v > R0) || id_lt(e, pl->head) || !id_lt(e, pl->tail))
         return true;
     if (blk(pl, e)->flags & LSM_PB_STOP)
         return false;
-    /* verified afresh, not read from the node's W: valleys move when blocks are appended (a node can vanish, or the
-     * one after it change), and an incremental backward pass that stopped early does not revisit it */
-    return arrival_ok((lsm_planner *)pl, e, pl->horizon_end_v);
+    /* The test depends on the blocks from e to the node after it and on that node's W. A backward pass that stopped
+     * at or after that node (bp_stop: everything before it unchanged) changed none of it, unless the stretch runs
+     * to the end of the buffer (a trim, or new blocks behind it). Else verified afresh, not read from the node's
+     * W: valleys move when blocks are appended (a node can vanish, or the one after it change). */
+    lsm_real w2;
+    const uint32_t n2 = node_after(pl, e, &w2);
+    if (n2 != pl->tail && !id_lt(pl->bp_stop, n2) && !pl->commit_dirty)
+        return true;
+    const bool ok = arrival_ok(pl, e, pl->horizon_end_v);
+    if (ok)
+        pl->commit_dirty = 0;
+    return ok;
 }
 
 void lsm_planner_release(lsm_planner *pl, uint32_t id)
@@ -1504,8 +1516,17 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     lsm_real xs;
     if (hi <= w1 ? region_ok(&pc, R0, D, hi) : fit_decel(&pc, R0, D, hi, w1, exact, true, &r, &xs))
         return hi;
-    for (int it = 0; it < W_BISECT; it++) {
-        const lsm_real mid = (lo + hi) / LSM_R(2.0);
+    /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
+     * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
+    lsm_real ga, gj, gs;
+    guess_limits(&pc, D, &ga, &gj, &gs);
+    lsm_real probe = speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
+    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+        lsm_real mid = (lo + hi) / LSM_R(2.0);
+        if (probe > lo && probe < hi) {
+            mid = probe;
+            probe = R0;
+        }
         const bool ok = mid <= w1 ? region_ok(&pc, R0, D, mid) : fit_decel(&pc, R0, D, mid, w1, exact, true, &r, &xs);
         if (ok)
             lo = mid;
@@ -2075,7 +2096,10 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
         id_end = node_after(pl, id_end, &w1);
         pctx_init(&pc, pl, id0, off0, id_end);
         skipped_here = false;
-        if (!(pc.D > LEN_EPS * (R1 + pc.D))) { /* a node right here (we stand on it): the next one */
+        if (!(pc.D > LEN_EPS * (R1 + pc.D)) && id_end != pl->tail) { /* a node right here (we stand on it): the
+                                                                           next one (the end itself is planned, however
+                                                                           short the rest: a hold may stop just
+                                                                           before it) */
             skipped_here = true;
             continue;
         }

@@ -59,11 +59,19 @@
  *    piece is found there, the step piece itself is complete and verified).
  *  - Commitment. Only the current ramp is ever committed: the interpolator re-plans (a = 0) in cruises and
  *    exactly at the end of a ramp when blocks arrived or the override changed, and it tells the planner that
- *    point and its speed there (lsm_planner_set_horizon). An append changes nothing before it, and after the
- *    backward pass a verified piece from that point at that speed must still exist: if it does not (the new
- *    block, or the trim of its corner, took room the machine needs to slow down), the junction becomes an exact
- *    stop instead, which restores the previous plan (it stopped there) (stats.horizon_stops). A lower override
- *    applies from a block far enough out that the same holds (at worst, to blocks appended later only).
+ *    point and its speed there, and where its current piece ends and at what speed (lsm_planner_set_horizon).
+ *    An append changes nothing before that point. If it invalidates the current piece (a corner trims the block
+ *    the piece ends in, or the piece's end is no longer a speed from which the machine can go on: valleys near the
+ *    end of the buffer move when blocks are appended), a verified piece from the horizon must exist, and the
+ *    interpolator must take a new piece there (piece_stale); if none exists (the new block, or the trim of its
+ *    corner, took room the machine needs to slow down), the junction becomes an exact stop instead, which restores
+ *    the previous plan exactly (stats.horizon_stops; the node detection never looks across an exact stop). A lower
+ *    override applies from a block far enough out that the same holds (at worst, to blocks appended later only).
+ *  - Arrivals. Feasibility is not strictly monotone in the speed (near the caps the budgets vanish and the
+ *    whole-cycle ramps change shape with the speed), so a W says nothing of the speeds below it: a piece arrives
+ *    at a node below its W only at a speed that passed W's own test, the forward search always tries, last, the
+ *    piece the node's certificate verified, and the backward pass keeps an old W only if it still passes its test.
+ *  - The control cycle does not plan: pieces are planned ahead by lsm_interp_prepare (interp.h).
  *    Hence a buffer underrun is a clean, verified stop on the path, and the interpolator starts again by itself
  *    when blocks are appended behind it.
  *  - Feed hold: one verified ramp to rest, started at the next point where a = 0, within the path up to the
@@ -225,7 +233,8 @@ typedef struct lsm_planner {
     uint8_t piece_stale;        /* a corner trimmed the block the current piece ends in: a new piece must start at
                                    the horizon (appends verified that one exists there); cleared by the
                                    interpolator when it takes one */
-    uint8_t reserved3[3];
+    uint8_t commit_dirty;       /* the commitment changed since it was last verified in full */
+    uint8_t reserved3[2];
     uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */
     uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
     /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */

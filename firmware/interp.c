@@ -735,7 +735,11 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             q->gen == pl->gen) {
             take(ip, q, dt, true);
         } else if (at_a_zero(ip) && !CUR(ip).hold &&
-                   (pl->piece_stale || (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
+                   ((pl->piece_stale && !(q->ready && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial &&
+                                          q->gen == pl->gen && q->cycle > ip->cycles)) ||
+                    (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
+            /* (a stale piece waits for a replacement prepared for a sample still ahead in this cruise: planned
+             * with the current plan, it is verified, and the rest of the cruise is not what changed) */
             swpt w;
             memset(&w, 0, sizeof w);
             w.kind = LSM_INTERP_SW_SAMPLE;
@@ -774,6 +778,10 @@ lsm_status lsm_interp_prepare(lsm_interp *ip)
         return LSM_OK;
     const lsm_interp_prep *q = &ip->prep;
     if (same_switch(ip, q, &w))
+        return q->ready ? LSM_OK : LSM_E_INFEASIBLE;
+    /* a piece prepared for a cruise sample still ahead (lead_cycles) stays: the target moves on with every cycle */
+    if (w.kind == LSM_INTERP_SW_SAMPLE && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial &&
+        q->gen == ip->pl->gen && q->mode == w.mode && q->cycle > ip->cycles && (q->ready || q->failed))
         return q->ready ? LSM_OK : LSM_E_INFEASIBLE;
     ip->prepared++;
     const lsm_status st = plan_switch(ip, &w);

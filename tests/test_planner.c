@@ -243,6 +243,7 @@ typedef struct run_opts {
     long ovr_at[4];
     double ovr_val[4];
     int no_prepare;          /* do not call lsm_interp_prepare (every piece is planned inside the cycle) */
+    uint32_t lead_cycles;    /* lsm_interp.lead_cycles: cruise switch points this many cycles ahead */
 } run_opts;
 
 typedef struct run_res {
@@ -344,6 +345,7 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     assert_int_equal(lsm_planner_init(&pl, &cfg, store, o->capacity, st), LSM_OK);
     lsm_interp ip;
     assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    ip.lead_cycles = o->lead_cycles;
     long cap = 1 << 16;
     r->q = malloc((size_t)cap * 3 * sizeof(double));
     int next = 0, fin = 0;
@@ -536,11 +538,12 @@ static void scenario(int kind, const char *name, int mode)
         memset(&o, 0, sizeof o);
         o.capacity = kind == 3 ? 256 : 16 + (uint32_t)(test_urand(&rs) * 64);
         o.hold_at = o.resume_at = -1;
-        o.no_prepare = mode >= 4;
-        if (mode == 1 || mode == 4) { /* hold and resume */
+        o.no_prepare = mode == 4 || mode == 5;
+        o.lead_cycles = mode >= 6 ? 3u : 0u;
+        if (mode == 1 || mode == 4 || mode == 6) { /* hold and resume */
             o.hold_at = 20 + (long)(test_urand(&rs) * 400);
             o.resume_at = o.hold_at + 200 + (long)(test_urand(&rs) * 300);
-        } else if (mode == 2 || mode == 5) { /* override changes */
+        } else if (mode == 2 || mode == 5 || mode == 7) { /* override changes */
             o.n_ovr = 3;
             for (int i = 0; i < 3; i++) {
                 o.ovr_at[i] = 10 + (long)(test_urand(&rs) * 1500);
@@ -553,7 +556,7 @@ static void scenario(int kind, const char *name, int mode)
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
-        if ((mode == 1 || mode == 4) && r.held_cycles > 0) {
+        if ((mode == 1 || mode == 4 || mode == 6) && r.held_cycles > 0) {
             held++;
             if (r.held_motion != 0)
                 fail_msg("%s %ld: moved %.3g mm while held", name, c, r.held_motion);
@@ -567,9 +570,9 @@ static void scenario(int kind, const char *name, int mode)
     print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle\n",
                   name, ok, held, underruns, prepared, tick_plans);
     /* with lsm_interp_prepare before every cycle, the cycle plans only pieces that follow one shorter than a cycle */
-    if (mode < 4 && tick_plans * 100 > prepared)
+    if ((mode < 4 || mode >= 6) && tick_plans * 100 > prepared)
         fail_msg("%s: %ld of %ld pieces planned inside the cycle", name, tick_plans, prepared);
-    if (mode >= 4 && prepared != 0)
+    if ((mode == 4 || mode == 5) && prepared != 0)
         fail_msg("%s: %ld pieces prepared without lsm_interp_prepare", name, prepared);
     assert_true(ok > 0);
 }
@@ -610,6 +613,14 @@ static void test_no_prepare(void **state)
     (void)state;
     scenario(2, "hold (no prepare)", 4);
     scenario(2, "override (no prepare)", 5);
+}
+
+/* Replacements planned 3 cycles ahead of the cruise sample they start at (a background task that needs time). */
+static void test_lead_cycles(void **state)
+{
+    (void)state;
+    scenario(2, "hold (lead 3)", 6);
+    scenario(2, "override (lead 3)", 7);
 }
 
 static void test_underrun(void **state)
@@ -798,6 +809,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_arcs),       cmocka_unit_test(test_mixed),      cmocka_unit_test(test_dense),
         cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),  cmocka_unit_test(test_underrun),
         cmocka_unit_test(test_resume_after_underrun), cmocka_unit_test(test_no_prepare),
+        cmocka_unit_test(test_lead_cycles),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

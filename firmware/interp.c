@@ -644,7 +644,6 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             return;
         }
-        const uint32_t ended_serial = ip->serial;
         end_piece(ip);
         if (CUR(ip).stop || !(left > R0))
             return;
@@ -657,10 +656,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         w.blk = ip->blk;
         w.off = ip->off_mm;
         w.v = ip->v_mm_s;
-        const uint32_t cur = ip->serial;
-        ip->serial = ended_serial; /* (end_piece does not change it: the successor follows this piece) */
-        const lsm_interp_prep *q = piece_for(ip, &w);
-        ip->serial = cur;
+        const lsm_interp_prep *q = piece_for(ip, &w); /* (serial is still the ended piece's: its successor) */
         if (q == NULL || !(NXT(ip).T_s > R0))
             return;
         take(ip, q, left, false);

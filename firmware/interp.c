@@ -430,6 +430,26 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w)
     return plan_switch(ip, w) == LSM_OK ? q : NULL;
 }
 
+/* piece_for, and where the geometry the current piece runs into has changed (piece_stale) and nothing fits in mode
+ * w->mode, a piece planned normally instead: a new piece must start here (a verified one, or at worst a verified
+ * stop). */
+static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w)
+{
+    const lsm_interp_prep *q = piece_for(ip, w);
+    if ((q == NULL || !(NXT(ip).T_s > R0)) && ip->pl->piece_stale) {
+        w->mode = LSM_PIECE_NORMAL;
+        q = piece_for(ip, w);
+    }
+    return q;
+}
+
+/* Is a piece of switch kind `kind` ready in the slot for the current piece and plan? */
+static bool prep_ready(const lsm_interp *ip, uint8_t kind)
+{
+    const lsm_interp_prep *q = &ip->prep;
+    return q->ready && q->kind == kind && q->serial == ip->serial && q->gen == ip->pl->gen;
+}
+
 /* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
 static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool replace)
 {
@@ -457,9 +477,7 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
 {
     if (!(p == 1u || p == 8u || p == 9u || p == 16u))
         return false;
-    const lsm_interp_prep *q = &ip->prep;
-    if (q->ready && q->kind == LSM_INTERP_SW_BOUNDARY && q->serial == ip->serial && q->phase == p &&
-        q->gen == ip->pl->gen)
+    if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p)
         return true;
     if ((p == 8u || p == 16u) && !CUR(ip).hold && ip->pl->piece_stale)
         return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */
@@ -620,13 +638,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off);
                 w.v = CUR(ip).st[ip->phase].v_mm_s;
             }
-            const lsm_interp_prep *q = piece_for(ip, &w);
-            if ((q == NULL || !(NXT(ip).T_s > R0)) && ip->pl->piece_stale) {
-                /* the geometry the current piece runs into has changed: a new piece must start here (planned
-                 * normally: a verified one, or at worst a verified stop) */
-                w.mode = LSM_PIECE_NORMAL;
-                q = piece_for(ip, &w);
-            }
+            const lsm_interp_prep *q = replacement_for(ip, &w);
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
@@ -727,12 +739,11 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
         /* a new piece from the last sample (a = 0 there): prepared for this cycle, or (without lsm_interp_prepare)
          * wanted now */
         const lsm_interp_prep *q = &ip->prep;
-        if (q->ready && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial && q->cycle == ip->cycles &&
-            q->gen == pl->gen) {
+        const bool sample_ready = prep_ready(ip, LSM_INTERP_SW_SAMPLE);
+        if (sample_ready && q->cycle == ip->cycles) {
             take(ip, q, dt, true);
         } else if (at_a_zero(ip) && !CUR(ip).hold &&
-                   ((pl->piece_stale && !(q->ready && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial &&
-                                          q->gen == pl->gen && q->cycle > ip->cycles)) ||
+                   ((pl->piece_stale && !(sample_ready && q->cycle > ip->cycles)) ||
                     (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
             /* (a stale piece waits for a replacement prepared for a sample still ahead in this cruise: planned
              * with the current plan, it is verified, and the rest of the cruise is not what changed) */
@@ -744,11 +755,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             w.blk = ip->blk;
             w.off = ip->off_mm;
             w.v = ip->v_mm_s;
-            q = piece_for(ip, &w);
-            if ((q == NULL || !(NXT(ip).T_s > R0)) && pl->piece_stale) { /* must be replaced here (see run_cycle) */
-                w.mode = LSM_PIECE_NORMAL;
-                q = piece_for(ip, &w);
-            }
+            q = replacement_for(ip, &w);
             if (q != NULL)
                 take(ip, q, dt, true);
             else if (is_cruise(ip->phase) && w.mode == LSM_PIECE_REPLAN)

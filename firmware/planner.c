@@ -1493,6 +1493,22 @@ static lsm_real cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a
     return lo;
 }
 
+/* The test of a node's W for speed v over the piece pc (from the node to the next one, whose W is w1; exactly if
+ * exact): one verified ramp from v reaches w1 by its end (*r, starting at *xs), or a cruise at v goes through. */
+static bool w_test(pctx *pc, lsm_real v, lsm_real w1, bool exact, ramp *r, lsm_real *xs)
+{
+    return v <= w1 ? region_ok(pc, R0, pc->D, v) : fit_decel(pc, R0, pc->D, v, w1, exact, true, r, xs);
+}
+
+/* The midpoint of a bisection over [lo, hi], or the first time the probe when it lies inside the bracket (the
+ * bracket only narrows: a probe outside it stays outside, so it is used at most once). */
+static lsm_real probe_mid(lsm_real lo, lsm_real hi, lsm_real *probe)
+{
+    const lsm_real p = *probe;
+    *probe = R0;
+    return p > lo && p < hi ? p : (lo + hi) / LSM_R(2.0);
+}
+
 /* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact): a bisection
  * between the speed that can cruise through the piece (or 0 before an exact stop) and c0. Feasibility is not
  * strictly monotone in the speed near the caps (whole-cycle ramps against budgets that vanish at the cap), so a W
@@ -1514,7 +1530,7 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
         return hi;
     ramp r;
     lsm_real xs;
-    if (hi <= w1 ? region_ok(&pc, R0, D, hi) : fit_decel(&pc, R0, D, hi, w1, exact, true, &r, &xs))
+    if (w_test(&pc, hi, w1, exact, &r, &xs))
         return hi;
     /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
      * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
@@ -1522,13 +1538,8 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     guess_limits(&pc, D, &ga, &gj, &gs);
     lsm_real probe = speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
     for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
-        lsm_real mid = (lo + hi) / LSM_R(2.0);
-        if (probe > lo && probe < hi) {
-            mid = probe;
-            probe = R0;
-        }
-        const bool ok = mid <= w1 ? region_ok(&pc, R0, D, mid) : fit_decel(&pc, R0, D, mid, w1, exact, true, &r, &xs);
-        if (ok)
+        const lsm_real mid = probe_mid(lo, hi, &probe);
+        if (w_test(&pc, mid, w1, exact, &r, &xs))
             lo = mid;
         else
             hi = mid;
@@ -1546,7 +1557,7 @@ static bool cert_ok(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real v, l
         return v <= w1;
     ramp r;
     lsm_real xs;
-    return v <= w1 ? region_ok(&pc, R0, pc.D, v) : fit_decel(&pc, R0, pc.D, v, w1, exact, true, &r, &xs);
+    return w_test(&pc, v, w1, exact, &r, &xs);
 }
 
 /* Can a piece that arrives at node `id` (a = 0) at speed v go on? The test of node_w: one verified ramp from v
@@ -2123,11 +2134,7 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
                 lsm_real lo = v0, hi = v1;
                 lsm_real probe = speed_for_dist(v0, pc.D, ga, gj, gs, v1);
                 for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
-                    lsm_real mid = (lo + hi) / LSM_R(2.0);
-                    if (probe > lo && probe < hi) {
-                        mid = probe;
-                        probe = R0;
-                    }
+                    const lsm_real mid = probe_mid(lo, hi, &probe);
                     if (feas5(&pc, v0, mid, mid, false, false, &p))
                         lo = mid;
                     else
@@ -2189,7 +2196,7 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
             memset(&p, 0, sizeof p);
             p.v0 = p.vc = v0;
             no_ramp(&p.A, pl->cfg.cycle_s, v0);
-            if (v0 > v1 ? fit_decel(&pc, R0, pc.D, v0, v1, exact, true, &r, &xs) : region_ok(&pc, R0, pc.D, v0)) {
+            if (w_test(&pc, v0, v1, exact, &r, &xs)) {
                 p.v1 = v0 > v1 ? v1 : v0;
                 if (v0 > v1) {
                     p.B = r;
@@ -2214,11 +2221,7 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
                 lsm_real l = lo, u = hi;
                 lsm_real probe = cruise_for_dist(v0, v1, pc.D, ga, gj, gs, hi);
                 for (int it = 0; it < VC_BISECT + (have ? 0 : 20) && u - l > SPEED_RES * u; it++) {
-                    lsm_real mid = (l + u) / LSM_R(2.0);
-                    if (probe > l && probe < u) {
-                        mid = probe;
-                        probe = R0;
-                    }
+                    const lsm_real mid = probe_mid(l, u, &probe);
                     if (feas5(&pc, v0, mid, v1, exact, false, &p)) {
                         best = p;
                         have = true;

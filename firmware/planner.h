@@ -230,9 +230,9 @@ typedef struct lsm_planner {
     lsm_real horizon_v;
     uint32_t horizon_end;       /* its current piece ends at the start of this block (the tail: the buffer's end) */
     lsm_real horizon_end_v;     /* at this speed (a = 0): the W of that node must stay at least this */
-    uint8_t piece_stale;        /* a corner trimmed the block the current piece ends in: a new piece must start at
-                                   the horizon (appends verified that one exists there); cleared by the
-                                   interpolator when it takes one */
+    uint8_t piece_stale;        /* the current piece was invalidated (a corner trimmed the block it ends in, or its
+                                   end speed no longer goes on): a new piece must start at the horizon (verified to
+                                   exist there); cleared by the interpolator when it takes one */
     uint8_t commit_dirty;       /* the commitment changed since it was last verified in full */
     uint8_t reserved3[2];
     uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */

@@ -43,43 +43,6 @@ static void cl_cinv(lsm_real br, lsm_real bi, lsm_real *rr, lsm_real *ri)
     }
 }
 
-/* sin and cos of x. Float: the reduction and the polynomials of lsm_math_sinf / lsm_math_cosf (lsm_math.c), done
- * once for both, so the results are the same bits as theirs; double: the C library. */
-#if LSM_REAL_IS_FLOAT
-static void cl_sincos(float x, float *s_out, float *c_out)
-{
-    if (x != x || x > 3.0e38f || x < -3.0e38f) {
-        *s_out = *c_out = x - x;
-        return;
-    }
-    const float kf = x * 0.636619772367581f;
-    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
-    const unsigned quadrant = (unsigned)(int32_t)k & 3u;
-    const float r = ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
-    const float z = r * r;
-    const float sp = ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
-    const float cp =
-        ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
-    float sv = sp, cv = cp; /* quadrant 0 */
-    if (quadrant & 1u) {    /* 1: (cp, -sp); 3: (-cp, sp) */
-        sv = cp;
-        cv = -sp;
-    }
-    if (quadrant & 2u) { /* 2: (-sp, -cp) */
-        sv = -sv;
-        cv = -cv;
-    }
-    *s_out = sv;
-    *c_out = cv;
-}
-#else
-static void cl_sincos(double x, double *s_out, double *c_out)
-{
-    *s_out = sin(x);
-    *c_out = cos(x);
-}
-#endif
-
 /* ---------------------------------------------------------------- Taylor kernel */
 
 /* Stopping tolerance for a piece with psi(u) = a u + b u^2/2: the imaginary parts are about
@@ -147,7 +110,7 @@ static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom
         m = (int)lsm_ceil(ph);
     const lsm_real h = s / (lsm_real)m;
     lsm_real rr, ri;
-    cl_sincos(th0, &ri, &rr);
+    lsm_sincos(th0, &ri, &rr);
     for (int j = 0; j < 3; j++)
         mr[j] = mi[j] = LSM_R(0.0);
     lsm_clothoid_series se;
@@ -264,7 +227,7 @@ static void cl_phase_x2(lsm_real x, lsm_real *co, lsm_real *si)
     if (r > LSM_R(2.0))
         r -= LSM_R(4.0);
     const lsm_real ang = CL_PI * LSM_R(0.5) * r;
-    cl_sincos(ang, si, co);
+    lsm_sincos(ang, si, co);
 }
 
 void lsm_clothoid_fresnel(lsm_real x, lsm_real *c, lsm_real *s)
@@ -312,7 +275,7 @@ static void cl_fresnel_end(lsm_real u, lsm_real th, lsm_real *ar, lsm_real *ai, 
         lsm_real gr, gi;
         cl_fresnel_aux(au, &gr, &gi);
         lsm_real co, si;
-        cl_sincos(th, &si, &co);
+        lsm_sincos(th, &si, &co);
         *ar = sg * LSM_R(0.5);
         *ai = sg * LSM_R(0.5);
         *br = -sg * (gr * co - gi * si);
@@ -374,7 +337,7 @@ static void cl_integral_fresnel(lsm_real th0, lsm_real k0, lsm_real c, lsm_real 
     if (dar != LSM_R(0.0) || dai != LSM_R(0.0)) {
         const lsm_real thv = cl_vertex_phase(th0, k0, c);
         lsm_real co, si;
-        cl_sincos(thv, &si, &co);
+        lsm_sincos(thv, &si, &co);
         rr += co * dar - si * dai;
         ri += co * dai + si * dar;
     }
@@ -407,7 +370,7 @@ void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, ls
         const lsm_real h = LSM_R(0.5) * k0 * s;
         const lsm_real sinc = h == LSM_R(0.0) ? LSM_R(1.0) : lsm_sin(h) / h;
         lsm_real co, si;
-        cl_sincos(th0 + h, &si, &co);
+        lsm_sincos(th0 + h, &si, &co);
         *dx = s * sinc * co;
         *dy = s * sinc * si;
         return;
@@ -612,7 +575,7 @@ static void cl_anchor(lsm_clothoid_stepper *st)
         dy = mi[0];
     } else {
         lsm_clothoid_integral(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy);
-        cl_sincos(cl_theta(cl, s), &rot[1], &rot[0]);
+        lsm_sincos(cl_theta(cl, s), &rot[1], &rot[0]);
     }
     st->x_mm = cl->x0_mm + dx;
     st->y_mm = cl->y0_mm + dy;
@@ -650,7 +613,7 @@ static bool cl_anchor_poly(lsm_clothoid_stepper *st)
             return false;
         m = (int)mm;
     }
-    cl_sincos(cl->theta0_rad, &st->ty, &st->tx);
+    lsm_sincos(cl->theta0_rad, &st->ty, &st->tx);
     st->x_mm = cl->x0_mm;
     st->y_mm = cl->y0_mm;
     st->cx_mm = st->cy_mm = LSM_R(0.0);
@@ -832,7 +795,7 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
         /* dP/dc = int (t^2 / 2) i e^{i theta} dt = (i M2) / 2 */
         J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]);   /* dF1/dc */
         lsm_real co, si;
-        cl_sincos(th, &si, &co);
+        lsm_sincos(th, &si, &co);
         J[1] = f->nx * co + f->ny * si;                         /* dF1/ds */
         J[2] = LSM_R(0.5) * s * s;                              /* dF2/dc */
         J[3] = f->k0 + c * s;                                   /* dF2/ds */
@@ -879,7 +842,7 @@ lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, 
     if (lsm_fabs(f.d0) <= d_err) {
         /* on the line: the only solution is s = 0, if the tangent is already along the normal */
         lsm_real co, si;
-        cl_sincos(f.th0, &si, &co);
+        lsm_sincos(f.th0, &si, &co);
         const lsm_real cr = f.nx * si - f.ny * co;
         if (lsm_fabs(cr) <= LSM_R(16.0) * LSM_REAL_EPS) {
             out->c_per_mm2 = LSM_R(0.0);

@@ -9,51 +9,27 @@
  * classic Cephes minimax polynomials on [-pi/4, pi/4]; cbrt by an exponent-halving first guess and three
  * Newton steps; atan by the Cephes reduction to |t| <= tan(pi/8) and a degree-9 odd polynomial.
  * Accuracy (tests/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
- * The double build keeps the C library (lsm_math.h).
+ * The double build keeps the C library (lsm_math.h). The sin/cos kernels are inline in lsm_math.h, so that
+ * lsm_math_sincosf (both at once, the same bits) inlines where it is called.
  */
 #include "lsm_math.h"
 
 #include <string.h>
 
-#define PIO2_1 1.5703125f              /* pi/2 in three parts, the first two with trailing zero bits */
-#define PIO2_2 4.837512969970703e-4f
-#define PIO2_3 7.549790126404332e-8f
-#define TWO_OVER_PI 0.636619772367581f
 #define PIO2_F 1.5707963267948966f
 #define PIO4_F 0.7853981633974483f
-
-static float sin_poly(float r)
-{
-    const float z = r * r;
-    return ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
-}
-
-static float cos_poly(float r)
-{
-    const float z = r * r;
-    return ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
-}
-
-/* x = k pi/2 + r with |r| <= pi/4 (about); returns r and the quadrant k mod 4. */
-static float reduce(float x, unsigned *quadrant)
-{
-    const float kf = x * TWO_OVER_PI;
-    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
-    *quadrant = (unsigned)(int32_t)k & 3u;
-    return ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
-}
 
 float lsm_math_sinf(float x)
 {
     if (x != x || x > 3.0e38f || x < -3.0e38f)
         return x - x; /* NaN for NaN and inf */
     unsigned q;
-    const float r = reduce(x, &q);
+    const float r = lsm_math_reduce_pio2f(x, &q);
     switch (q) {
-    case 0: return sin_poly(r);
-    case 1: return cos_poly(r);
-    case 2: return -sin_poly(r);
-    default: return -cos_poly(r);
+    case 0: return lsm_math_sin_polyf(r);
+    case 1: return lsm_math_cos_polyf(r);
+    case 2: return -lsm_math_sin_polyf(r);
+    default: return -lsm_math_cos_polyf(r);
     }
 }
 
@@ -62,12 +38,12 @@ float lsm_math_cosf(float x)
     if (x != x || x > 3.0e38f || x < -3.0e38f)
         return x - x;
     unsigned q;
-    const float r = reduce(x, &q);
+    const float r = lsm_math_reduce_pio2f(x, &q);
     switch (q) {
-    case 0: return cos_poly(r);
-    case 1: return -sin_poly(r);
-    case 2: return -cos_poly(r);
-    default: return sin_poly(r);
+    case 0: return lsm_math_cos_polyf(r);
+    case 1: return -lsm_math_sin_polyf(r);
+    case 2: return -lsm_math_cos_polyf(r);
+    default: return lsm_math_sin_polyf(r);
     }
 }
 

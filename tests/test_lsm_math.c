@@ -41,6 +41,26 @@ static void test_sin_cos(void **state)
     assert_true(isnan(lsm_math_sinf(NAN)) && isnan(lsm_math_cosf(INFINITY)));
 }
 
+/* lsm_math_sincosf: the same bits as lsm_math_sinf and lsm_math_cosf, in every quadrant and for NaN and inf. */
+static void test_sincos_same_bits(void **state)
+{
+    (void)state;
+    uint64_t st = 9;
+    for (int i = 0; i < 200000; i++) {
+        const float x = (float)((test_urand(&st) * 2 - 1) * (i < 100000 ? 8.0 : 1000.0));
+        float s, c;
+        lsm_math_sincosf(x, &s, &c);
+        if (s != lsm_math_sinf(x) || c != lsm_math_cosf(x))
+            fail_msg("x %.9g: sincos (%.9g, %.9g), sin %.9g, cos %.9g", (double)x, (double)s, (double)c,
+                     (double)lsm_math_sinf(x), (double)lsm_math_cosf(x));
+    }
+    float s, c;
+    lsm_math_sincosf(NAN, &s, &c);
+    assert_true(isnan(s) && isnan(c));
+    lsm_math_sincosf(-INFINITY, &s, &c);
+    assert_true(isnan(s) && isnan(c));
+}
+
 static void test_cbrt(void **state)
 {
     (void)state;
@@ -77,6 +97,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sin_cos),
+        cmocka_unit_test(test_sincos_same_bits),
         cmocka_unit_test(test_cbrt),
         cmocka_unit_test(test_atan2),
     };

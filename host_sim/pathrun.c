@@ -368,7 +368,6 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     double t_append = 0, t_step = 0, t_prep = 0;
     size_t ev = 0;
     int rc = 0;
-    uint32_t pieces0 = 0;
     uint64_t k_done = 0;
     for (uint64_t k = 0;; k++) {
         if (!fin) {
@@ -437,7 +436,6 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     r->plan_ns_per_block = appended ? t_append / (double)appended : 0;
     r->interp_ns_per_cycle = out->n ? t_step / (double)out->n : 0;
     r->prepare_ns_per_piece = ip->prepared ? t_prep / (double)ip->prepared : 0;
-    (void)pieces0;
 done:
     r->stats = pl->stats;
     r->replans = ip->replans;

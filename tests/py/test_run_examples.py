@@ -67,8 +67,9 @@ def read_program(path, sample=True):
             if k in vals:
                 end[i] = vals[k]
         if not sample:
-            pass
-        elif mode in (0, 1):
+            pos = end
+            continue
+        if mode in (0, 1):
             n = max(2, int(math.ceil(np.linalg.norm(end - pos) / SAMPLE_MM)) + 1)
             pts.extend(pos + (end - pos) * t for t in np.linspace(0, 1, n)[1:])
         else:

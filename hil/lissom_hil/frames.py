@@ -11,6 +11,7 @@ capture thread would starve the CANopen master. The socket also subscribes to er
 receive queue. Frames the rig itself sends (SYNC, NMT, SDO requests) are captured too: on a SocketCAN bus
 every socket sees the others' frames.
 """
+import os
 import select
 import socket
 import struct
@@ -47,6 +48,8 @@ class FrameLog:
         self.sock = None
         self._thread = None
         self._run = False
+        self._wake_r = self._wake_w = None
+        self._drains = 0  # times the reader has found the socket empty (see mark)
 
     def start(self):
         s = socket.socket(socket.PF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
@@ -60,6 +63,8 @@ class FrameLog:
                 continue
         s.bind((self.channel,))
         self.sock = s
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_r, False)
         self._run = True
         self._thread = threading.Thread(target=self._reader, name="framelog", daemon=True)
         self._thread.start()
@@ -73,14 +78,21 @@ class FrameLog:
         if self.sock is not None:
             self.sock.close()
             self.sock = None
+        for fd in (self._wake_r, self._wake_w):
+            if fd is not None:
+                os.close(fd)
+        self._wake_r = self._wake_w = None
 
     def _reader(self):
         s = self.sock
         anc = socket.CMSG_SPACE(_TIMEVAL.size)
         while self._run:
-            r, _, _ = select.select([s], [], [], 0.1)
-            if not r:
-                continue
+            r, _, _ = select.select([s, self._wake_r], [], [], 0.1)
+            if self._wake_r in r:  # mark() asks for a drain
+                try:
+                    os.read(self._wake_r, 4096)
+                except BlockingIOError:
+                    pass
             batch = []
             while True:
                 try:
@@ -100,14 +112,23 @@ class FrameLog:
                 rtr = bool(ident & CAN_RTR_FLAG)
                 batch.append(Frame(t, ident & (CAN_EFF_MASK if ext or err else 0x7FF), b"" if rtr else payload[:dlc],
                                    ext, rtr, err))
-            if batch:
-                with self.cond:
-                    self.frames.extend(batch)
-                    self.cond.notify_all()
+            with self.cond:  # the socket is empty: everything queued on it before this drain is captured
+                self.frames.extend(batch)
+                self._drains += 1
+                self.cond.notify_all()
 
     def mark(self):
-        """Index to pass as `since` to only look at frames captured from now on."""
+        """Index to pass as `since` to only look at frames captured from now on. A frame already on the bus counts
+        as before the mark even if the capture thread has not read it yet (say the response to an SDO request the
+        master has just received on its own socket): the capture socket is drained first."""
         with self.cond:
+            if self._thread is None:
+                return len(self.frames)
+            n = self._drains
+            os.write(self._wake_w, b"\0")
+            # a drain that ended before this call may still be counting itself: wait for the one after it, which
+            # began after the wake-up
+            self.cond.wait_for(lambda: self._drains >= n + 2 or not self._run, timeout=2.0)
             return len(self.frames)
 
     def select(self, pred=None, since=0):

@@ -5,7 +5,8 @@
 #     (hil/vm/, set up on first use into ~/.cache/lissom-vm) and runs the whole suite inside that one guest.
 # Usage: hil/run_hil.sh [pytest args...]        e.g. hil/run_hil.sh -k pp -x
 # Env:   LISSOM_BUILD (default build): where bin/lissom-node is;  LISSOM_HIL_OUT (default out/hil): artefacts;
-#        LISSOM_HIL_VM=1 forces the VM, =0 forbids it;  LSM_VM_* (see hil/vm/vm_run.sh).
+#        LISSOM_HIL_VM=1 forces the VM, =0 forbids it;  LSM_VM_* (see hil/vm/vm_run.sh; LSM_VM_SMP defaults
+#        to 2 here).
 # The last line of the pytest output is its usual summary ("N passed, M failed in T s"); exit code = pytest's.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -40,6 +41,9 @@ if [ "${LISSOM_HIL_VM:-}" != 1 ] && have_vcan; then
 else
   if [ "${LISSOM_HIL_VM:-}" = 0 ]; then echo "run_hil: no vcan here and LISSOM_HIL_VM=0" >&2; exit 2; fi
   echo "[hil] no vcan in this kernel: one QEMU guest for the whole suite"
+  # two vCPUs: with one, lissom-node's 1 kHz cycle took 80-100 % of it under emulation and the Python master
+  # about 10 %, so SDO answers waited in its queue past the 5 s timeout (docs/hil.md, "Measured")
+  export LSM_VM_SMP=${LSM_VM_SMP:-2}
   hil/vm/setup_vm.sh || { echo "run_hil: VM setup failed" >&2; exit 2; }
   # the guest sees the repository read-only (tmpfs overlay); OUT is shared read-write
   hil/vm/vm_run.sh -r "$OUT" -C "$REPO" -e "LISSOM_NODE=$NODE" -e "LISSOM_HIL_PLOT=0" -e "PYTHONPATH=$PYTHONPATH" \

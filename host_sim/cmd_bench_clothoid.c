@@ -2,7 +2,7 @@
  * lissom-sim bench-clothoid: host timing of the clothoid code (a benchmark, not a test).
  *   lissom-sim bench-clothoid [--corners N] [--seed S] [--repeat R] [--steps N] [--corners-out FILE] [--json]
  *
- * - ns per corner smoothed (firmware/corner.h), over N seeded random corners (a quarter each of
+ * - ns per corner smoothed (firmware/path/corner.h), over N seeded random corners (a quarter each of
  *   line-line in 3-D, line-arc, arc-line and arc-arc in G17; deflection 1..179 deg, radii 2..200 mm,
  *   tolerance 0.002..0.2 mm), each smoothed R times; also per kind;
  * - ns per incremental clothoid step (lsm_clothoid_step, 0.05 mm steps) and, for comparison, ns per

@@ -1,5 +1,5 @@
 /*
- * lissom-sim clothoid: evaluate a clothoid, or fit one to a line (firmware/clothoid.h).
+ * lissom-sim clothoid: evaluate a clothoid, or fit one to a line (firmware/path/clothoid.h).
  *   lissom-sim clothoid eval --x0 X --y0 Y --theta0 T --kappa0 K --c C --s S [--json]
  *       prints {"x","y","theta","kappa"}: the state at arc length S (eqs 1, 2, 11, 12).
  *   lissom-sim clothoid fit --x0 X --y0 Y --theta0 T --kappa0 K --line A,B,C [--json]
@@ -7,7 +7,7 @@
  *       (paper section IV); prints {"c","s","x","y","theta","kappa","iterations"} (plus
  *       "evaluations", "residual_mm", "residual_rad").
  *   lissom-sim clothoid g2path --gcode FILE (--segments N | --tolerance T) [--amax A] [--jmax J] [--json]
- *       the section-V G2 path (firmware/g2path.h) of the contour made by the program's G1/G2/G3 blocks
+ *       the section-V G2 path (firmware/path/g2path.h) of the contour made by the program's G1/G2/G3 blocks
  *       (rapids are skipped; the plane is that of its arcs, G17 if none): prints the report
  *       {"segments","deviation","deviation_polygon","kappa_max","sharpness_max","feed_limit_eq7_mm_s",
  *       "feed_limit_eq8_mm_s","feed_limit_eq7_mm_min","feed_limit_eq8_mm_min","end_gap","builds"} and,

@@ -1,5 +1,5 @@
 /*
- * lissom-sim move: a synchronised point-to-point move (firmware/move.h).
+ * lissom-sim move: a synchronised point-to-point move (firmware/profile/move.h).
  *   lissom-sim move --distance D1[,D2,...] --vmax .. --amax .. --jmax .. --snap-max .. --cycle T
  *                   [--v0 ..] [--v1 ..] [--rule paper|strict] [--samples FILE.csv] --json
  * Each of --vmax/--amax/--jmax/--snap-max/--v0/--v1 takes one value for all axes or one per axis.

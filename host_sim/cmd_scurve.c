@@ -1,5 +1,5 @@
 /*
- * lissom-sim scurve: plans one sin² velocity change (firmware/scurve.h) and prints it as JSON.
+ * lissom-sim scurve: plans one sin² velocity change (firmware/profile/scurve.h) and prints it as JSON.
  *   lissom-sim scurve --v0 V0 --v1 V1 --amax A --jmax J --snap-max DJ --cycle T [--rule paper|strict]
  *                     [--samples FILE.csv] --json
  * Units are any consistent set (mm, s by convention; the algorithm is dimensionally homogeneous, so the

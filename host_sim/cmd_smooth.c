@@ -1,9 +1,9 @@
 /*
- * lissom-sim smooth: G2 corner smoothing of a G-code program (firmware/corner.h).
+ * lissom-sim smooth: G2 corner smoothing of a G-code program (firmware/path/corner.h).
  *   lissom-sim smooth --gcode FILE --tolerance EPS [--amax A] [--jmax J] [--json]
  *
- * Reads the program with the G-code parser (firmware/gcode.h), turns G1/G2/G3 blocks into path
- * elements (firmware/geom.h) and smooths every corner between two consecutive feed blocks with a
+ * Reads the program with the G-code parser (firmware/gcode/gcode.h), turns G1/G2/G3 blocks into path
+ * elements (firmware/path/geom.h) and smooths every corner between two consecutive feed blocks with a
  * clothoid pair within EPS (mm). Each block may lose at most half its length to each of its two
  * corners. A corner is not blended (status "stop": the machine stops there) next to a rapid (G0),
  * under G61, when a block moves A B C, when it is not planar, for an exact reversal, or when no

@@ -12,7 +12,7 @@
  * union of intervals, its outer ends may be missed: the searches are local, see below). The planner goes as fast
  * as possible (s_max). When the set is empty, a dichotomy over the steps since the last such event finds the
  * latest step k from which a braking sequence comes to rest without an empty set; the braking step is taken at k
- * and the planner goes on with s_max (paper Fig. 3, reproduced step for step in tests/test_sim_vpop.c). The
+ * and the planner goes on with s_max (paper Fig. 3, reproduced step for step in tests/sim/test_sim_vpop.c). The
  * paper's braking sequence (s_min at every step) ends at rest with the deceleration still in the history, a dead
  * end on curves (on the trident it creeps for minutes), so the sequences tried are the jerk-limited stop of a
  * point on the local tangent (as hard as the release of the deceleration allows) with two jerk values, then two

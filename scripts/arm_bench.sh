@@ -2,7 +2,7 @@
 # arm_bench.sh: instruction counts and flash/RAM of the float core on Cortex-M4F (QEMU mps2-an386).
 # Builds the cortex-m4f preset if needed, runs lissom-bench.elf under qemu -icount shift=0 and prints
 #   1. a table: benchmark | instructions | per (plan, cycle, call, block) | calls averaged | max single cycle
-#   2. the core's flash/RAM: per object of liblsm_core_f.a (arm-none-eabi-size), and per component as linked
+#   2. the core's flash/RAM: per object of the component archives liblsm_<component>_f.a (arm-none-eabi-size), and per component as linked
 #      into each image (from the linker map, scripts/arm_mapsize.py); lissom-contour.elf is the core with a
 #      128-block look-ahead (planner, interpolator and nothing else of the core)
 # scripts/arm_report.sh formats the planner/interpolator figures of issue 7 against their goals.
@@ -14,7 +14,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD=${LSM_ARM_BUILD_DIR:-$ROOT/build-arm}
 QEMU_TIMEOUT=${LSM_QEMU_TIMEOUT:-60}
 ELF=$BUILD/bin/lissom-bench.elf
-CORE=$BUILD/firmware/liblsm_core_f.a
+
 
 mkdir -p "$BUILD"
 if [ ! -f "$BUILD/CMakeCache.txt" ]; then
@@ -58,11 +58,11 @@ echo "Float core archive, per object (arm-none-eabi-size; everything compiled, b
 echo
 echo "| object | text (flash) | data | bss |"
 echo "|---|---:|---:|---:|"
-arm-none-eabi-size -t "$CORE" | awk 'NR>1 && $6 != "(TOTALS)" {sub(/ \(ex .*$/, "", $6); printf "| %s | %s | %s | %s |\n", $6, $1, $2, $3}
+arm-none-eabi-size -t "$BUILD"/firmware/*/liblsm_*_f.a | awk 'NR>1 && $6 != "(TOTALS)" {sub(/ \(ex .*$/, "", $6); printf "| %s | %s | %s | %s |\n", $6, $1, $2, $3}
                                     $6 == "(TOTALS)" {printf "| **total** | **%s** | **%s** | **%s** |\n", $1, $2, $3}'
 python3 "$ROOT/scripts/arm_mapsize.py" "$BUILD"/bin/lissom-selftest.elf.map "$BUILD"/bin/lissom-contour.elf.map \
     "$BUILD"/bin/lissom-bench.elf.map
 echo
-echo "Core with a 128-block look-ahead: liblsm_core_f.a in lissom-contour.elf above; per object, RAM per block and"
+echo "Core with a 128-block look-ahead: the liblsm_*_f.a archives in lissom-contour.elf above; per object, RAM per block and"
 echo "the goals: scripts/arm_report.sh."
 echo "arm_bench: PASS"

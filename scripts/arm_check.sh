@@ -49,8 +49,9 @@ if [ $build_rc -ne 0 ]; then
     tail -40 "$BUILD/arm_check.build.log"; fail "build"; finish
 fi
 echo "ok: built ($(grep -c '^\[' "$BUILD/arm_check.build.log") steps; log: $BUILD/arm_check.build.log)"
-CORE=$BUILD/firmware/liblsm_core_f.a
-[ -f "$CORE" ] || { fail "no-core-archive"; finish; }
+# the float core: one archive per component (firmware/<component>/liblsm_<component>_f.a)
+mapfile -t CORE < <(ls "$BUILD"/firmware/*/liblsm_*_f.a 2>/dev/null)
+[ ${#CORE[@]} -gt 0 ] || { fail "no-core-archive"; finish; }
 # the contour program's host twin, built now from the same sources as the images (compared at the end)
 if [ ! -f "$HOST_BUILD/CMakeCache.txt" ]; then
     host_built=no-host-build; echo "FAIL: $HOST_BUILD is not configured (scripts/build.sh, or set LSM_BUILD_DIR)"
@@ -67,7 +68,7 @@ for img in "${IMAGES[@]}"; do
     if [ -f "$elf" ]; then ELFS+=("$elf"); else fail "missing-$img"; fi
 done
 [ ${#ELFS[@]} -gt 0 ] && arm-none-eabi-size "${ELFS[@]}"
-arm-none-eabi-size -t "$CORE" | tail -1 | awk '{printf "float core archive (all objects): text %s data %s bss %s\n", $1, $2, $3}'
+arm-none-eabi-size -t "${CORE[@]}" | tail -1 | awk '{printf "float core archive (all objects): text %s data %s bss %s\n", $1, $2, $3}'
 
 echo "== no heap, no stdio"
 # heap: malloc family and its reentrant forms, sbrk; stdio: the printf family and what it drags in
@@ -91,18 +92,18 @@ for elf in "${ELFS[@]}"; do
     if [ -n "$bad" ]; then fail "double-$(basename "$elf" .elf)"; echo "  $(basename "$elf"): $bad"
     else echo "ok: $(basename "$elf"): no double-precision routines"; fi
 done
-warn=$(arm-none-eabi-nm -A "$CORE" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
+warn=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
        grep -E " ($(sed 's/^\^//;s/\$$//' <<<"$DBL_RE")|$(sed 's/^\^//;s/\$$//' <<<"$LIBM_D_RE"))$" |
-       sed -E 's#^.*\(?liblsm_core_f\.a:##; s#:$##' | sort -u)
+       sed -E 's#^.*\(?liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 if [ -n "$warn" ]; then
     echo "WARNING: the float core refers to double-precision routines (slow on a single-precision FPU):"
     sed 's/^/  /' <<<"$warn"
 else
     echo "ok: float core archive refers to no double-precision routine"
 fi
-info=$(arm-none-eabi-nm -A "$CORE" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
+info=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
        grep -E ' __aeabi_(ldivmod|uldivmod|l2f|ul2f|f2lz|f2ulz|llsl|llsr|lasr|lmul)$' |
-       sed -E 's#^.*liblsm_core_f\.a:##; s#:$##' | sort -u)
+       sed -E 's#^.*liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 [ -n "$info" ] && { echo "note: 64-bit integer helpers (software routines) used by the float core:"; sed 's/^/  /' <<<"$info"; }
 
 echo "== QEMU mps2-an386 -icount shift=0 (timeout ${QEMU_TIMEOUT}s)"

@@ -3,7 +3,7 @@
 
 usage: arm_mapsize.py IMAGE.elf.map [...]
 
-Every input section placed in the image is attributed to its archive (liblsm_core_f.a, libm.a, ...) or object
+Every input section placed in the image is attributed to its archive (liblsm_plan_f.a, libm.a, ...) or object
 file. Flash = .isr_vector + .text (code and constants) + .ARM.exidx + the initial values of .data;
 RAM = .data + .bss. Prints one markdown table per image. Exit 2 if a map file cannot be read or parsed.
 """

@@ -5,7 +5,7 @@ usage: arm_report.py BENCH_LOG CONTOUR_LOG CONTOUR_MAP [--ramp RAMP_LOG] [--gcc 
 
 BENCH_LOG: output of lissom-bench.elf ("bench", "size", "note" lines, bench_main.c / bench_planner.c);
 CONTOUR_LOG: output of lissom-contour.elf (stack high-water mark, checksum); CONTOUR_MAP: its linker map, whose
-core objects (liblsm_core_f.a) are the flash of the core with a 128-block look-ahead (the image links only what
+core objects (the component archives liblsm_<component>_f.a) are the flash of the core with a 128-block look-ahead (the image links only what
 the planner, the interpolator and the contour program need). RAMP_LOG: output of lissom-bench-ramp.elf (the
 planner's ramp sizing and phase evaluation inside appends). scripts/arm_report.sh builds and runs everything
 and calls this. Exit 2 if an input is missing or lacks a figure.
@@ -45,11 +45,11 @@ def parse_bench(text):
 
 
 def core_objects(map_path):
-    """Flash/RAM per object of liblsm_core_f.a, and per other component, in the image of map_path."""
+    """Flash/RAM per object of the core (liblsm_<component>_f.a), and per other component, in the image of map_path."""
     orig = arm_mapsize.component
 
     def comp(path):
-        m = re.search(r"liblsm_core_f\.a\((\S+?)(\.obj|\.o)?\)", path)
+        m = re.search(r"liblsm_[a-z]+_f\.a\((\S+?)(\.obj|\.o)?\)", path)
         return "core:" + m.group(1) if m else orig(path)
 
     arm_mapsize.component = comp
@@ -122,7 +122,7 @@ def main(argv):
         p(f"| {kind} | {axes} | {n(a['value'])} | {n(int(a['max']))}{where} | "
           f"{a['calls']} ({int(a['calls']) - int(q['calls'])}) |")
     p("")
-    p("1 axis: X lines (collinear joins, reversals); 3 axes: the contour program (`firmware/port/contour`); "
+    p("1 axis: X lines (collinear joins, reversals); 3 axes: the contour program (`firmware/apps/contour`); "
       "6 axes: lines moving all six axes, and the contour with A B C configured (arcs and corner blends are "
       "X Y Z only, so A B C stand still there).")
     p("")
@@ -197,7 +197,7 @@ def main(argv):
       f"{n(size.get('lookahead_128_blocks', 0))} |")
     p(f"| stack high-water mark of the contour image (main loop + SysTick handler with FPU context) | "
       f"{n(stack) if stack is not None else '?'} |")
-    p(f"| core flash, `liblsm_core_f.a` as linked into `lissom-contour.elf` (`--gc-sections`) | **{n(core_flash)}** |")
+    p(f"| core flash, the core archives (`liblsm_*_f.a`) as linked into `lissom-contour.elf` (`--gc-sections`) | **{n(core_flash)}** |")
     p(f"| + newlib libm / libc (`memcpy`, `memset`, `floorf`, `ceilf`, ...) | {n(libm)} / {n(libc)} |")
     p(f"| core static RAM (.data + .bss of the core) | {core_ram} |")
     if args.size:

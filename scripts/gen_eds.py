@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate hil/lissom.eds (CiA 306 electronic data sheet) from the object dictionary the firmware serves.
 
-The firmware's table (firmware/canopen.c) is the single source of truth: tests/py/co_od_dump.c is compiled
+The firmware's table (firmware/canopen/canopen.c) is the single source of truth: tests/py/co_od_dump.c is compiled
 against the firmware sources and prints every object the node serves, with its type, access, PDO flag, range
 and the value it has after boot. This script adds names and writes the EDS; tests/py/test_eds.py checks
 that the committed EDS loads with canopen.import_od and matches the firmware object by object.
@@ -20,8 +20,10 @@ import sys
 import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-FIRMWARE_SOURCES = ["can.c", "co_od.c", "co_sdo.c", "co_nmt.c", "co_emcy.c", "co_pdo.c", "co_path.c",
-                    "cia402.c", "canopen.c", "status.c"]
+# the CANopen component and what it uses (paths under firmware/)
+FIRMWARE_SOURCES = ["canopen/can.c", "canopen/co_od.c", "canopen/co_sdo.c", "canopen/co_nmt.c", "canopen/co_emcy.c",
+                    "canopen/co_pdo.c", "canopen/co_path.c", "canopen/cia402.c", "canopen/canopen.c", "base/status.c"]
+FIRMWARE_INCLUDES = ["canopen", "base"]
 EDS_AXES = 3  # the configuration the committed EDS describes (X, Y, Z)
 
 # Object names. Per-axis objects (index + 0x800 k) get "Axis k " in front for k > 0.
@@ -98,8 +100,9 @@ def build_dump_tool(workdir, cc=None):
     cc = cc or os.environ.get("CC") or shutil.which("cc") or "gcc"
     exe = os.path.join(workdir, "co_od_dump")
     fw = os.path.join(REPO, "firmware")
-    cmd = [cc, "-std=c11", "-O1", "-Wall", "-Wextra", "-Werror", "-I", fw,
-           os.path.join(REPO, "tests", "py", "co_od_dump.c")] + [os.path.join(fw, s) for s in FIRMWARE_SOURCES]
+    cmd = [cc, "-std=c11", "-O1", "-Wall", "-Wextra", "-Werror"]
+    cmd += [a for d in FIRMWARE_INCLUDES for a in ("-I", os.path.join(fw, d))]
+    cmd += [os.path.join(REPO, "tests", "py", "co_od_dump.c")] + [os.path.join(fw, s) for s in FIRMWARE_SOURCES]
     cmd += ["-o", exe]
     subprocess.run(cmd, check=True)
     return exe

@@ -3,7 +3,7 @@ injected: any socket on vcan0 can send a frame with CAN_ERR_FLAG, and the node's
 error frames, receives it exactly as it would from a real controller. Error passive -> EMCY 0x8120; bus-off ->
 the node goes silent and applies the communication-error reaction (PRE-OPERATIONAL, 0x6007 quick stop:
 a jerk-limited stop); restarted -> EMCY 0x8140 and the heartbeat again. (On a real bus the controller produces
-these frames itself; the same path is covered without CAN by tests/test_canopen.c.)"""
+these frames itself; the same path is covered without CAN by tests/canopen/test_canopen.c.)"""
 import time
 
 import can

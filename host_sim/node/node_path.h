@@ -2,7 +2,7 @@
  * node_path.h: the path executor of lissom-node (node_path_*): runs the blocks of the CANopen path buffer
  * (co_path.h: lines and arcs with a feed and a tolerance) on the axes.
  *
- * INTERIM (documented in docs/hil.md): the look-ahead planner (firmware/planner.h) was not available when this
+ * INTERIM (documented in docs/hil.md): the look-ahead planner (firmware/plan/planner.h) was not available when this
  * was written, so every block is run on its own as an exact-stop move: the arc length s of the block goes from 0
  * to L with a rest-to-rest S-curve (node_prof.h, sin² profile, move.h engine) and the axes follow the block's
  * geometry at s. The feed is not blended across blocks: the path stops at every block end (no corner is cut,

@@ -7,7 +7,7 @@ twin build/bin/lissom-selftest-host (same program, same float core, compiled for
   - per part: number of plans, number of cycles, and the plan-side hash agree exactly;
   - the sampled setpoints agree: bit-exact where the libm does not matter, otherwise within float rounding;
   - the cycle-side hash (every setpoint of every cycle) agrees exactly.
-And the contour program (firmware/port/contour: lines, arcs, a helix, a dense polyline and clothoid corners through
+And the contour program (firmware/apps/contour: lines, arcs, a helix, a dense polyline and clothoid corners through
 the look-ahead planner and the interpolator) on build-arm/bin/lissom-contour.elf against its host twin
 build/bin/lissom-contour-host (same source, host float core):
   - the image's own checks passed ("contour PASS", exit 0), the host twin exited 0;
@@ -45,7 +45,7 @@ QEMU_CMD = [
 EXPECTED_FMT = "fmt 0 4294967295 -2147483648 -42 0xdeadbeef 0x0000001a 123.45 -0.07 5 1000.000"
 
 # Parts allowed to differ from the host by an ulp: none. The float core carries its own sin, cos, cbrt and atan2
-# (firmware/lsm_math.c, + - * / only), so every part must match the host bit for bit. (Before it did, the
+# (firmware/base/lsm_math.c, + - * / only), so every part must match the host bit for bit. (Before it did, the
 # closed-form part differed where newlib-nano and glibc round sinf differently.) Keep the mechanism for a
 # future part that must call the C library.
 LIBM_DEPENDENT_PARTS = set()

@@ -79,8 +79,9 @@ def pipe_exe(tmp_path_factory):
     exe = os.path.join(d, "co_node_pipe")
     fw = os.path.join(REPO, "firmware")
     cc = os.environ.get("CC", "cc")
-    subprocess.run([cc, "-std=c11", "-O1", "-Wall", "-Wextra", "-Werror", "-I", fw,
-                    os.path.join(REPO, "tests", "py", "co_node_pipe.c")]
+    incs = [a for d in gen_eds.FIRMWARE_INCLUDES for a in ("-I", os.path.join(fw, d))]
+    subprocess.run([cc, "-std=c11", "-O1", "-Wall", "-Wextra", "-Werror"] + incs +
+                   [os.path.join(REPO, "tests", "py", "co_node_pipe.c")]
                    + [os.path.join(fw, s) for s in gen_eds.FIRMWARE_SOURCES] + ["-o", exe], check=True)
     return exe
 

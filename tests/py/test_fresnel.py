@@ -3,7 +3,7 @@ high-precision references (mpmath at 40 digits; scipy.special.fresnel as a secon
 
 The binary: env LISSOM_SIM, else build/bin/lissom-sim under the repository root (tests/py/conftest.py).
 
-Accuracy claimed by firmware/clothoid.h: the normalised Fresnel integrals C(x), S(x) to 1e-12 relative in
+Accuracy claimed by firmware/path/clothoid.h: the normalised Fresnel integrals C(x), S(x) to 1e-12 relative in
 double (measured about 1e-15); a general clothoid's displacement to 1e-12 relative, plus the rounding that
 the phase theta(s) itself carries (about Phi * eps for a turning bound Phi).
 """

@@ -1,6 +1,6 @@
 """`lissom-sim run` on malformed G-code: each malformed input the issue lists stops the run with exit status 1 and
 one message on stderr naming the line, the column and what is wrong; nothing goes to stdout, even with --json.
-(The parser's own tests, with every error code, are in tests/test_gcode.c.)"""
+(The parser's own tests, with every error code, are in tests/gcode/test_gcode.c.)"""
 import os
 
 import pytest

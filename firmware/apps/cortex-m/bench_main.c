@@ -307,7 +307,7 @@ static void bench_stepgen(const char *name, uint8_t n_axes)
 static lsm_clothoid_stepper g_cst;
 static lsm_clothoid g_cseg;
 
-/* Clothoid blocks of the contour program (firmware/port/contour) with the cursor's offset at entry (s0). */
+/* Clothoid blocks of the contour program (firmware/apps/contour) with the cursor's offset at entry (s0). */
 typedef struct cl_entry {
     float k0, c, len, s0, th0;
 } cl_entry;

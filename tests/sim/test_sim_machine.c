@@ -42,16 +42,7 @@ static void find_dir(void)
         snprintf(g_dir, sizeof g_dir, "%s", env);
         return;
     }
-    snprintf(g_dir, sizeof g_dir, "%s", __FILE__);
-    char *slash = strrchr(g_dir, '/');
-    if (slash)
-        *slash = '\0'; /* .../tests */
-    slash = strrchr(g_dir, '/');
-    if (slash)
-        *slash = '\0'; /* repository root */
-    else
-        snprintf(g_dir, sizeof g_dir, "."); /* compiled as "tests/test_sim_machine.c" from the root */
-    strncat(g_dir, "/host_sim/machines", sizeof g_dir - strlen(g_dir) - 1);
+    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR, "/host_sim/machines"); /* the repository (tests/CMakeLists.txt) */
 }
 
 static void assert_rel(double a, double b, double tol)

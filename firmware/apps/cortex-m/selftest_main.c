@@ -4,7 +4,7 @@
  * 1. Prints a formatter check line ("fmt ...", compared with the expected text by the host test).
  * 2. Checks the port: init, GPIO write/read-back, E-stop read, CAN loopback (order, full, bad frames),
  *    microsecond clock.
- * 3. Runs the built-in self-test program (firmware/port/selftest): the evaluation on the SysTick control
+ * 3. Runs the built-in self-test program (firmware/apps/selftest): the evaluation on the SysTick control
  *    tick (one cycle per tick at LSM_SELFTEST_CYCLE_US), the planning in the main loop, which polls while
  *    both plan slots are full. Checks that the elapsed time matches the number of ticks, that no tick
  *    overran, and that every non-idle tick evaluated one cycle.

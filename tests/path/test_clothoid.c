@@ -1,6 +1,6 @@
 /*
  * test_clothoid.c: Fresnel integrals, clothoid evaluation, incremental stepping and the section-IV fit
- * (firmware/clothoid.h).
+ * (firmware/path/clothoid.h).
  *
  *   test_clothoid [seed] [count]      (default: seed 1, count 3000 random integrals and fits)
  *

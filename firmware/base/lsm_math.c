@@ -8,7 +8,7 @@
  * Method: Cody-Waite reduction by pi/2 with a three-part constant (exact for |x| < 2^15 pi/2), then the
  * classic Cephes minimax polynomials on [-pi/4, pi/4]; cbrt by an exponent-halving first guess and three
  * Newton steps; atan by the Cephes reduction to |t| <= tan(pi/8) and a degree-9 odd polynomial.
- * Accuracy (tests/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
+ * Accuracy (tests/base/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
  * The double build keeps the C library (lsm_math.h). The sin/cos kernels are inline in lsm_math.h, so that
  * lsm_math_sincosf (both at once, the same bits) inlines where it is called.
  */

@@ -1,5 +1,5 @@
 /*
- * test_scurve.c: the sin² velocity change (firmware/scurve.h).
+ * test_scurve.c: the sin² velocity change (firmware/profile/scurve.h).
  *  - Kombarov Table 1 with rule `paper`: every printed value within ±0.001 (Test 4's first J_P is printed 6.685,
  *    a typo: the algorithm and the paper's own dt2A = 0.136 give 9.626, which is what we check).
  *  - rule `strict`: no limit exceeded after correction, and no shorter whole-cycle profile exists (brute force).

@@ -1,5 +1,5 @@
 /*
- * contour_main.c: lissom-contour.elf, the built-in contour program (firmware/port/contour: lines, arcs, a dense
+ * contour_main.c: lissom-contour.elf, the built-in contour program (firmware/apps/contour: lines, arcs, a dense
  * polyline and clothoid corners through the look-ahead planner and the interpolator, 128-block look-ahead, float
  * core) on the Cortex-M4F (QEMU mps2-an386).
  *

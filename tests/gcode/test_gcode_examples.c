@@ -44,16 +44,7 @@ static void find_dir(void)
         snprintf(g_dir, sizeof g_dir, "%s", env);
         return;
     }
-    snprintf(g_dir, sizeof g_dir, "%s", __FILE__);
-    char *slash = strrchr(g_dir, '/');
-    if (slash)
-        *slash = '\0';
-    slash = strrchr(g_dir, '/');
-    if (slash)
-        *slash = '\0';
-    else
-        snprintf(g_dir, sizeof g_dir, ".");
-    strncat(g_dir, "/host_sim/examples", sizeof g_dir - strlen(g_dir) - 1);
+    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR, "/host_sim/examples"); /* the repository (tests/CMakeLists.txt) */
 }
 
 static const prog_t *load(const char *name)

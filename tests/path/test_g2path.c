@@ -1,5 +1,5 @@
 /*
- * test_g2path.c: the section-V G2 path construction (firmware/g2path.h).
+ * test_g2path.c: the section-V G2 path construction (firmware/path/g2path.h).
  *
  *   test_g2path [seed] [count]      (default: seed 1, count 40 random contours)
  *

@@ -1,5 +1,5 @@
 /*
- * test_corner.c: path elements (firmware/geom.h) and G2 corner smoothing (firmware/corner.h).
+ * test_corner.c: path elements (firmware/path/geom.h) and G2 corner smoothing (firmware/path/corner.h).
  *
  *   test_corner [seed] [count]      (default: seed 1, count 600 random corners)
  *

@@ -40,13 +40,10 @@
 static uint64_t g_seed = 20260322;
 static long g_count = 4;
 
-/* the repository root, from this file's path (tests/test_sim_vpop.c) */
+/* a path in the repository (LSM_REPO_DIR: tests/CMakeLists.txt); rel starts without a slash */
 static void repo_path(char *out, size_t n, const char *rel)
 {
-    const char *f = __FILE__;
-    const char *t = strstr(f, "tests/test_sim_vpop.c");
-    const int k = t ? (int)(t - f) : 0;
-    snprintf(out, n, "%.*s%s", k, f, rel);
+    snprintf(out, n, "%s/%s", LSM_REPO_DIR, rel);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */

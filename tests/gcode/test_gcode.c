@@ -1,5 +1,5 @@
 /*
- * test_gcode.c: the G-code parser (firmware/gcode.c), built for double and float.
+ * test_gcode.c: the G-code parser (firmware/gcode/gcode.c), built for double and float.
  *
  * Every word of the subset, modal behaviour, arcs in the I/J/K and R forms in all three planes,
  * inch and incremental modes, streaming in chunks of every size, and malformed input: each error

@@ -42,7 +42,7 @@
  * state of lsm_clothoid_eval, bit for bit). Error: the truncation is below eps/16, so what is left is
  * rounding: mainly the direction of the tangent, which random-walks by about eps per step, so that the
  * position drifts by roughly (distance since the anchor) * sqrt(steps) * eps (measured in
- * tests/test_clothoid.c and reported in docs/clothoid.md). Cost on a Cortex-M4F (float, -Os, instructions):
+ * tests/path/test_clothoid.c and reported in docs/clothoid.md). Cost on a Cortex-M4F (float, -Os, instructions):
  * ~155 per step whatever |kappa ds| up to 0.4 rad (about 350 at 0.5 rad), ~170 with re-anchoring every 64
  * steps; starting at a block's entry (lsm_clothoid_init + lsm_clothoid_stepper_init) ~340; a direct
  * evaluation ~1 050.

@@ -1,5 +1,5 @@
 /*
- * test_gcode_fuzz.c: randomized properties of the G-code parser (firmware/gcode.c).
+ * test_gcode_fuzz.c: randomized properties of the G-code parser (firmware/gcode/gcode.c).
  *
  *   test_gcode_fuzz [seed] [count]      (default: seed 1, 20000 programs; a soak run passes more)
  *

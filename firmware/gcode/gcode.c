@@ -973,6 +973,7 @@ static lsm_status execute(lsm_gcode *p, const gc_words *w, lsm_gcode_result *res
     if (st != LSM_OK)
         return st;
     exec_stop(p, w, &x, res);
+    res->nonmodal = w->g[GRP_NONMODAL];
 
     /* commit */
     p->modal = x.m;
@@ -1097,6 +1098,7 @@ static void result_begin(lsm_gcode *p, lsm_gcode_result *res)
     res->complete = true;
     res->line = ++p->line_no;
     res->status = LSM_OK;
+    res->nonmodal = -1;
 }
 
 static lsm_status result_end(lsm_gcode *p, lsm_gcode_result *res, lsm_status st)

@@ -238,6 +238,7 @@ typedef struct lsm_gcode_result {
     lsm_gcode_modal modal;  /* modal state after the line */
     bool end_of_program;    /* M2, M30 or the closing '%' was read (on this or an earlier line) */
     bool ignored;           /* a non-blank line after the end of the program (read and ignored) */
+    int16_t nonmodal;       /* the line's non-modal G code times ten (G4: 40, G28.1: 281, ...), -1 if none */
 } lsm_gcode_result;
 
 typedef struct lsm_gcode_options {

@@ -1,13 +1,13 @@
 /*
  * lissom-sim check: every error and warning of a G-code program in one pass (the firmware's parser, gcode.h).
  *
- *   lissom-sim check PROGRAM [--machine MACHINE.json] [--json] [--blocks] [--start X,Y,Z[,A,B,C]]
+ *   lissom-sim check PROGRAM [--machine MACHINE.json | --axes XYZ] [--json] [--blocks] [--start X,Y,Z[,A,B,C]]
  *
  * PROGRAM "-" reads standard input. Each refused line is reported as `PROGRAM:LINE:COLUMN: error: REASON 'WORD'`
  * and reading goes on (a refused line changes nothing, so later lines are checked as the machine would run them
  * without it). Warnings: text after the end of the program (ignored, as LinuxCNC does), no end of program (M2, M30
  * or a closing %), G28/G30 before any G28.1/G30.1 (they go to machine zero), G43 (the simulator has no tool table:
- * no length is applied). --machine refuses words for axes the machine lacks. Exit status: 0 when there is no error
+ * no length is applied). --machine (or --axes with the axis letters) refuses words for axes the machine lacks. Exit status: 0 when there is no error
  * (warnings allowed), 1 with errors, 2 on bad usage or an unreadable file.
  * --json prints {"errors": [...], "warnings": [...], "blocks": N, "events": N} instead, and with --blocks also the
  * motion blocks and machine functions themselves (mm, mm/s, rad; the Python rig reads its blocks from here, so
@@ -176,10 +176,18 @@ static int check_text(const char *text, size_t len, const lsm_gcode_options *go,
                 if (r.ignored && ignored++ == 0)
                     ignored_first = (int)r.line;
                 line_warnings(l, &r, homes_set);
-                for (int k = 0; k < r.n_blocks && l->blocks; k++)
-                    put_block(l, &r.blocks[k]);
-                for (int k = 0; k < r.n_events && l->events; k++)
-                    put_event(l, &r.events[k], l->n_blocks - r.n_blocks + r.events[k].at_block);
+                for (int k = 0; k < r.n_blocks; k++) {
+                    if (l->blocks)
+                        put_block(l, &r.blocks[k]);
+                    else
+                        l->n_blocks++;
+                }
+                for (int k = 0; k < r.n_events; k++) {
+                    if (l->events)
+                        put_event(l, &r.events[k], l->n_blocks - r.n_blocks + r.events[k].at_block);
+                    else
+                        l->n_events++;
+                }
                 ended = r.end_of_program;
                 if (!percent && n > 0 && memchr(s, '%', n))
                     percent = true;
@@ -268,6 +276,7 @@ int cmd_check(int argc, char **argv)
     cli_args a;
     cli_init(&a, argc, argv);
     const char *machine = cli_opt(&a, "machine");
+    const char *axes = cli_opt(&a, "axes");
     const bool json = cli_flag(&a, "json"), blocks = cli_flag(&a, "blocks");
     double start[LSM_GCODE_N_AXES];
     bool start_given = false;
@@ -277,7 +286,7 @@ int cmd_check(int argc, char **argv)
     if (cli_check_unused(&a, "check"))
         return 2;
     if (!program || (blocks && !json)) {
-        fprintf(stderr, "usage: lissom-sim check PROGRAM|- [--machine MACHINE.json] [--json [--blocks]] "
+        fprintf(stderr, "usage: lissom-sim check PROGRAM|- [--machine MACHINE.json | --axes XYZ] [--json [--blocks]] "
                         "[--start X,Y,Z[,A,B,C]]\n");
         return 2;
     }
@@ -291,6 +300,21 @@ int cmd_check(int argc, char **argv)
             return 2;
         }
         go.axis_mask = m.axis_mask;
+    }
+    if (axes) { /* --axes XYZ: the machine's axes without a machine file */
+        go.axis_mask = 0;
+        for (const char *c = axes; *c; c++) {
+            const char *at = strchr("XYZABC", *c);
+            if (!at || !*c) {
+                fprintf(stderr, "error: --axes takes letters of XYZABC, not '%c'\n", *c);
+                return 2;
+            }
+            go.axis_mask |= (uint8_t)(1u << (at - "XYZABC"));
+        }
+        if (!go.axis_mask) {
+            fprintf(stderr, "error: --axes is empty\n");
+            return 2;
+        }
     }
     size_t len = 0;
     char *text = strcmp(program, "-") == 0 ? read_stdin(&len) : sim_read_file(program, &len);

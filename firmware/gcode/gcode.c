@@ -997,7 +997,7 @@ static void describe_word(lsm_gcode_result *res, const char *s, uint32_t n)
 {
     lsm_gcode_error *e = &res->err;
     char *out = e->word;
-    const uint32_t cap = (uint32_t)sizeof e->word - 1u;
+    const uint32_t cap = 20u; /* then "..." and the NUL: sizeof e->word >= 24 */
     uint32_t k = 0, i = e->column ? e->column - 1u : 0u;
     out[0] = '\0';
     if (i >= n)
@@ -1029,6 +1029,9 @@ static void describe_word(lsm_gcode_result *res, const char *s, uint32_t n)
         } else {
             break;
         }
+    }
+    if (k == cap && i < n && i + 1 < n && !is_blank(s[i]) && !(s[i] == close)) {
+        out[k++] = '.', out[k++] = '.', out[k++] = '.';
     }
     out[k] = '\0';
 }
@@ -1084,12 +1087,20 @@ static lsm_status parse(lsm_gcode *p, const char *s, uint32_t n, lsm_gcode_resul
     return st;
 }
 
-/* A line after the end of the program: read and ignored; flagged when it holds more than blanks. */
+/* A line after the end of the program: read and ignored; flagged when it holds more than blanks, comments and
+ * the closing '%'. */
 static void mark_ignored(lsm_gcode_result *res, const char *s, size_t n)
 {
-    for (size_t i = 0; i < n; i++)
-        if (!is_blank(s[i]) && s[i] != '\n')
+    bool paren = false;
+    for (size_t i = 0; i < n; i++) {
+        const char c = s[i];
+        if (c == ';' && !paren)
+            return;
+        if (c == '(' || c == ')')
+            paren = c == '(';
+        else if (!paren && !is_blank(c) && c != '\n' && c != '%')
             res->ignored = true;
+    }
 }
 
 static void result_begin(lsm_gcode *p, lsm_gcode_result *res)

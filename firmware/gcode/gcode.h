@@ -219,7 +219,8 @@ typedef struct lsm_gcode_error {
     uint32_t line;
     uint32_t column;
     const char *reason;   /* what is wrong, e.g. "unknown word", "unsupported: parameters" (static text) */
-    char word[16];        /* the offending word as written (blanks removed, letters upper case), e.g. "Q7" */
+    char word[24];        /* the offending word as written (blanks removed, letter upper case), e.g. "Q7"; a word
+                             longer than 20 characters ends in "..." */
 } lsm_gcode_error;
 
 /* What one line produced. */

@@ -2,7 +2,7 @@
  * lissom-sim stream: run a G-code program on a Lissom node over SocketCAN (docs/canopen.md path protocol).
  *
  *   lissom-sim stream PROGRAM --iface IFACE --node-id N [--tol-mm T] [--rapid-mm-s V] [--sync-ms P]
- *                     [--progress | --no-progress] [--yes]
+ *                     [--sdo-timeout-ms T] [--progress | --no-progress] [--yes]
  *
  * The program is parsed with the firmware's parser (gcode.h); any error stops before anything moves (all of them are
  * listed, as `check` does). Then: NMT start, every axis to OPERATION ENABLED in path mode (-1), and the blocks go to
@@ -19,7 +19,9 @@
  * and G4 waits its seconds; M0/M1 wait for Enter on a terminal (with --yes, or without a terminal, they are logged
  * and the program goes on).
  * Progress (stderr): blocks sent and executed, the line, the feed (0x5006) and the position (TPDO3/TPDO4, the
- * telemetry PDOs the node sends at each SYNC; this tool sends SYNC every --sync-ms, default 10 ms).
+ * telemetry PDOs the node sends at each SYNC; this tool sends SYNC every --sync-ms, default 20 ms). SDO answers are
+ * awaited --sdo-timeout-ms (5000, as the HIL rig: a loaded host answers late); reads are asked again when an answer
+ * is lost, and a block download the node's server timed out is sent again (the node stores a block whole or not).
  * Ctrl-C: feed hold (path hold, 0x5000 = 2); Enter resumes; a second Ctrl-C is a quick stop (path clear and CiA 402
  * quick stop on every axis), exit 130.
  * Exit: 0 done; 1 program errors or a block the node refused; 2 usage; 3 the node faulted (its EMCY code and text
@@ -44,7 +46,9 @@
 #define ST_MAX_AXES 6
 #define ST_ENABLE_TIMEOUT_MS 2000 /* CiA 402 state changes of a node at rest take a few cycles */
 #define ST_PROGRESS_MS 200        /* progress line and feed read period */
-#define ST_POLL_MS 2              /* frame wait of one loop turn */
+#define ST_POLL_MS 5              /* frame wait of one loop turn */
+#define ST_BLOCK_RETRIES 20       /* a block download the node's SDO server timed out (0x05040000) is sent again */
+#define ST_READ_RETRIES 3         /* reads are idempotent: a lost answer is asked again */
 
 enum { EXIT_PROGRAM = 1, EXIT_USAGE = 2, EXIT_FAULT = 3, EXIT_COMM = 4, EXIT_STOPPED = 130 };
 
@@ -279,6 +283,15 @@ static int load_program(stream *s, const char *name, const char *text, size_t le
 /* ---------------------------------------------------------------------------------------------------------- */
 /* the node                                                                                                    */
 
+/* An SDO read, asked again when the answer is lost (a loaded bus or host). */
+static int64_t sdo_read(stream *s, uint16_t index, uint8_t sub, uint32_t *v)
+{
+    int64_t r = CO_SDO_TIMEOUT;
+    for (int k = 0; k < ST_READ_RETRIES && (r == CO_SDO_TIMEOUT || r == 0x05040000); k++)
+        r = co_sdo_read(&s->m, index, sub, v);
+    return r;
+}
+
 static int fail_comm(stream *s, const char *what, int64_t r)
 {
     fprintf(stderr, "\nerror: node %u: %s: %s", (unsigned)s->m.node_id, what, co_sdo_abort_text(r));
@@ -302,7 +315,7 @@ static int count_axes(stream *s)
     int n = 0;
     for (int k = 0; k < ST_MAX_AXES; k++) {
         uint32_t v;
-        int64_t r = co_sdo_read(&s->m, (uint16_t)(0x6041 + 0x800 * k), 0, &v);
+        int64_t r = sdo_read(s, (uint16_t)(0x6041 + 0x800 * k), 0, &v);
         if (r != 0) {
             if (k == 0)
                 return (int)(r < 0 ? r : -100);
@@ -318,7 +331,7 @@ static int enable_axes(stream *s)
     for (int k = 0; k < s->n_axes; k++) {
         const uint16_t base = (uint16_t)(0x800 * k);
         uint32_t sw = 0;
-        int64_t r = co_sdo_read(&s->m, (uint16_t)(0x6041 + base), 0, &sw);
+        int64_t r = sdo_read(s, (uint16_t)(0x6041 + base), 0, &sw);
         if (r != 0)
             return fail_comm(s, "statusword", r);
         if ((sw & 0x4F) == 0x08) { /* FAULT: fault reset (refused while the cause, e.g. the E-stop, is active) */
@@ -336,7 +349,7 @@ static int enable_axes(stream *s)
         }
         const double end = now_s() + ST_ENABLE_TIMEOUT_MS * 1e-3;
         for (;;) {
-            r = co_sdo_read(&s->m, (uint16_t)(0x6041 + base), 0, &sw);
+            r = sdo_read(s, (uint16_t)(0x6041 + base), 0, &sw);
             if (r != 0)
                 return fail_comm(s, "statusword", r);
             if ((sw & 0x6F) == 0x27)
@@ -368,7 +381,7 @@ typedef struct run_state {
     size_t ei;            /* next event */
     bool started, held;
     int free_est;         /* free slots as this master counts them */
-    double t_sync, t_progress, t0;
+    double t_sync, t_progress, t0, t_check;
     int sync_ms;
     bool progress, tty_in, yes;
     int interrupts_seen;
@@ -430,7 +443,7 @@ static void print_progress(stream *s, run_state *st, bool final)
         return;
     st->t_progress = t + ST_PROGRESS_MS * 1e-3;
     uint32_t v;
-    if (!final && co_sdo_read(&s->m, 0x5006, 0, &v) == 0)
+    if (!final && sdo_read(s, 0x5006, 0, &v) == 0)
         s->feed_mm_s = v * 1e-3;
     const uint32_t done = s->active_seq >= st->seq0 ? s->active_seq - st->seq0 + 1 : 0;
     const uint32_t line = done > 0 && done <= s->nb ? s->b[done - 1].line : 0;
@@ -445,19 +458,23 @@ static void print_progress(stream *s, run_state *st, bool final)
 }
 
 /* True when the node has run every block sent so far and rests (SDO: 0x5005, 0x5003, statusword bit 10). */
-static int node_done(stream *s, const run_state *st, bool *done)
+static int node_done(stream *s, run_state *st, bool *done)
 {
     *done = false;
     if (st->next == 0) {
         *done = true;
         return 0;
     }
+    const double t = now_s();
+    if (t < st->t_check)
+        return 0;
+    st->t_check = t + 0.02; /* SDO polls at most every 20 ms */
     uint32_t active, fr, sw;
-    int64_t r = co_sdo_read(&s->m, 0x5005, 0, &active);
+    int64_t r = sdo_read(s, 0x5005, 0, &active);
     if (r == 0)
-        r = co_sdo_read(&s->m, 0x5003, 0, &fr);
+        r = sdo_read(s, 0x5003, 0, &fr);
     if (r == 0)
-        r = co_sdo_read(&s->m, 0x6041, 0, &sw);
+        r = sdo_read(s, 0x6041, 0, &sw);
     if (r != 0)
         return fail_comm(s, "progress", r);
     s->active_seq = active;
@@ -468,9 +485,15 @@ static int node_done(stream *s, const run_state *st, bool *done)
 /* Sends block st->next with the flow control of docs/canopen.md. */
 static int send_next(stream *s, run_state *st)
 {
-    if (st->free_est <= 0) {
+    if (st->free_est <= 0 && s->tpdo2) {
+        /* TPDO2 of the last SYNC: its free slots, less the blocks accepted since (its last accepted is older) */
+        const uint32_t sent_last = st->seq0 + (uint32_t)st->next - 1u;
+        st->free_est = (int)s->free_slots - (int)(int32_t)(sent_last - s->last_acc);
+        if (st->free_est <= 0)
+            return 0; /* wait for the next SYNC's TPDO2 */
+    } else if (st->free_est <= 0) {
         uint32_t fr;
-        int64_t r = co_sdo_read(&s->m, 0x5003, 0, &fr);
+        int64_t r = sdo_read(s, 0x5003, 0, &fr);
         if (r != 0)
             return fail_comm(s, "free slots", r);
         st->free_est = (int)fr;
@@ -479,7 +502,12 @@ static int send_next(stream *s, run_state *st)
     }
     st_block *b = &s->b[st->next];
     put_u32(b->data, st->seq0 + (uint32_t)st->next);
-    const int64_t r = co_sdo_write(&s->m, 0x5010, 0, b->data, b->len);
+    int64_t r = co_sdo_write(&s->m, 0x5010, 0, b->data, b->len);
+    /* the node's SDO server gave up between segments (0x05040000, a loaded host), or the transfer was garbled: the
+     * block was not stored (whole or nothing), send it again */
+    for (int k = 0; k < ST_BLOCK_RETRIES && (r == 0x05040000 || r == 0x05030000 || r == 0x05040001 ||
+                                             r == CO_SDO_PROTOCOL); k++)
+        r = co_sdo_write(&s->m, 0x5010, 0, b->data, b->len);
     if (r == 0) {
         st->next++;
         st->free_est--;
@@ -493,7 +521,7 @@ static int send_next(stream *s, run_state *st)
         return 0; /* the same block again: a duplicate is acknowledged, not stored twice */
     if (r == 0x06090031) { /* gap: resend from the node's last accepted + 1 */
         uint32_t last;
-        int64_t r2 = co_sdo_read(&s->m, 0x5004, 0, &last);
+        int64_t r2 = sdo_read(s, 0x5004, 0, &last);
         if (r2 != 0)
             return fail_comm(s, "last accepted sequence", r2);
         st->next = (size_t)(last + 1u - st->seq0);
@@ -608,22 +636,22 @@ static int setup_node(stream *s, double start_mm[ST_MAX_AXES])
     s->n_axes = n;
     for (int k = 0; k < n; k++) {
         uint32_t v;
-        int64_t r = co_sdo_read(&s->m, (uint16_t)(0x2001 + 0x800 * k), 0, &v);
+        int64_t r = sdo_read(s, (uint16_t)(0x2001 + 0x800 * k), 0, &v);
         if (r != 0)
             return fail_comm(s, "position units per mm (0x2001)", r);
         s->cpm[k] = v ? v : 1;
-        r = co_sdo_read(&s->m, (uint16_t)(0x6062 + 0x800 * k), 0, &v);
+        r = sdo_read(s, (uint16_t)(0x6062 + 0x800 * k), 0, &v);
         if (r != 0)
             return fail_comm(s, "position demand (0x6062)", r);
         s->pos[k] = (int32_t)v;
         start_mm[k] = (double)(int32_t)v / s->cpm[k] * (k >= 3 ? LSM_PI / 180.0 : 1.0);
     }
     uint32_t v;
-    int64_t r = co_sdo_read(&s->m, 0x5007, 0, &v);
+    int64_t r = sdo_read(s, 0x5007, 0, &v);
     if (r != 0)
         return fail_comm(s, "path buffer capacity (0x5007)", r);
     s->capacity = (uint16_t)v;
-    r = co_sdo_read(&s->m, 0x5002, 0, &v);
+    r = sdo_read(s, 0x5002, 0, &v);
     if (r != 0)
         return fail_comm(s, "path state (0x5002)", r);
     if (v != 0) {
@@ -639,9 +667,10 @@ int cmd_stream(int argc, char **argv)
     cli_args a;
     cli_init(&a, argc, argv);
     const char *iface = cli_opt(&a, "iface");
-    double node_id = 0, tol = 0.01, rapid = 10000, sync_ms = 10;
+    double node_id = 0, tol = 0.01, rapid = 10000, sync_ms = 20, sdo_ms = 5000;
     if (cli_num_req(&a, "node-id", &node_id) < 0 || cli_num(&a, "tol-mm", &tol) < 0 ||
-        cli_num(&a, "rapid-mm-s", &rapid) < 0 || cli_num(&a, "sync-ms", &sync_ms) < 0)
+        cli_num(&a, "rapid-mm-s", &rapid) < 0 || cli_num(&a, "sync-ms", &sync_ms) < 0 ||
+        cli_num(&a, "sdo-timeout-ms", &sdo_ms) < 0)
         return EXIT_USAGE;
     const bool prog_on = cli_flag(&a, "progress"), prog_off = cli_flag(&a, "no-progress"), yes = cli_flag(&a, "yes");
     const char *program = cli_positional(&a, 0);
@@ -649,12 +678,13 @@ int cmd_stream(int argc, char **argv)
         return EXIT_USAGE;
     if (!program || !iface) {
         fprintf(stderr, "usage: lissom-sim stream PROGRAM --iface IFACE --node-id N [--tol-mm T] [--rapid-mm-s V] "
-                        "[--sync-ms P] [--progress | --no-progress] [--yes]\n");
+                        "[--sync-ms P] [--sdo-timeout-ms T] [--progress | --no-progress] [--yes]\n");
         return EXIT_USAGE;
     }
     if (!(node_id >= 1 && node_id <= 127 && node_id == floor(node_id)) || !(tol >= 0.001 && tol <= 1000) ||
-        !(rapid > 0 && rapid <= 1e6) || !(sync_ms >= 0 && sync_ms <= 1000)) {
-        fprintf(stderr, "error: --node-id 1..127, --tol-mm 0.001..1000, --rapid-mm-s (0, 1e6], --sync-ms 0..1000\n");
+        !(rapid > 0 && rapid <= 1e6) || !(sync_ms >= 0 && sync_ms <= 1000) || !(sdo_ms >= 10 && sdo_ms <= 60000)) {
+        fprintf(stderr, "error: --node-id 1..127, --tol-mm 0.001..1000, --rapid-mm-s (0, 1e6], --sync-ms 0..1000, "
+                        "--sdo-timeout-ms 10..60000\n");
         return EXIT_USAGE;
     }
     size_t len = 0;
@@ -674,6 +704,7 @@ int cmd_stream(int argc, char **argv)
         return EXIT_COMM;
     }
     s.m.on_frame = on_frame;
+    s.m.sdo_timeout_ms = (int)sdo_ms;
     s.m.ctx = &s;
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
@@ -698,7 +729,7 @@ int cmd_stream(int argc, char **argv)
     st.t0 = now_s();
     if (rc == 0) {
         uint32_t last;
-        int64_t r = co_sdo_read(&s.m, 0x5004, 0, &last);
+        int64_t r = sdo_read(&s, 0x5004, 0, &last);
         rc = r != 0 ? fail_comm(&s, "last accepted sequence (0x5004)", r) : enable_axes(&s);
         st.seq0 = last + 1u;
     }
@@ -715,7 +746,7 @@ int cmd_stream(int argc, char **argv)
         static const char axis[ST_MAX_AXES] = {'X', 'Y', 'Z', 'A', 'B', 'C'};
         for (int k = 0; k < s.n_axes; k++) {
             uint32_t v = 0;
-            co_sdo_read(&s.m, (uint16_t)(0x6062 + 0x800 * k), 0, &v);
+            sdo_read(&s, (uint16_t)(0x6062 + 0x800 * k), 0, &v);
             printf(" %c %.4f", axis[k], (double)(int32_t)v / s.cpm[k]);
         }
         printf("\n");

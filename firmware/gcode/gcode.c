@@ -116,7 +116,7 @@ typedef struct {
     uint32_t n_words;
     lsm_real val[26];
     uint32_t col[26];
-    gc_num num[26]; /* as parsed (integer checks of P, N, T, H, L) */
+    gc_num pnum, lnum; /* P and L as parsed (integer checks) */
     int16_t g[GRP_COUNT];
     uint32_t gcol[GRP_COUNT];
     int16_t m[MG_COUNT]; /* M number times ten, or -1 */
@@ -444,7 +444,10 @@ static lsm_status scan_words(const lsm_gcode *p, const char *s, uint32_t n, uint
         w->seen |= BIT(c);
         w->val[LETTER(c)] = num.value;
         w->col[LETTER(c)] = col;
-        w->num[LETTER(c)] = num;
+        if (c == 'P')
+            w->pnum = num;
+        else if (c == 'L')
+            w->lnum = num;
         w->n_words++;
     }
 }
@@ -624,7 +627,7 @@ static lsm_status exec_functions(const gc_words *w, gc_exec *x, lsm_gcode_result
         push_event(res, LSM_GCODE_EV_SPINDLE_SPEED, true, 0, m->speed_rpm);
     }
     if (w->seen & BIT('T')) {
-        m->tool_selected = (int32_t)w->num[LETTER('T')].value;
+        m->tool_selected = (int32_t)w->val[LETTER('T')];
         push_event(res, LSM_GCODE_EV_TOOL_SELECT, false, m->tool_selected, 0);
     }
     if (w->m[MG_TOOL] >= 0) {
@@ -672,7 +675,7 @@ static lsm_status exec_modes(const gc_words *w, gc_exec *x, lsm_gcode_result *re
         m->arc_absolute = w->g[GRP_ARCDIST] == 901;
     if (w->g[GRP_TOOL_LEN] == 430) {
         m->tool_length_on = true;
-        m->tool_length_h = (w->seen & BIT('H')) ? (int32_t)w->num[LETTER('H')].value : m->tool_loaded;
+        m->tool_length_h = (w->seen & BIT('H')) ? (int32_t)w->val[LETTER('H')] : m->tool_loaded;
         push_event(res, LSM_GCODE_EV_TOOL_LENGTH, false, m->tool_length_h, 0);
     } else if (w->g[GRP_TOOL_LEN] == 490) {
         m->tool_length_on = false;
@@ -715,7 +718,7 @@ static lsm_status exec_p(const gc_words *w, gc_exec *x, bool arc_cmd, uint32_t *
         if (users > 1)
             return fail_r(res, LSM_E_GC_MODAL_CONFLICT, pcol, "P used by two commands");
         if (arc_cmd) {
-            if (!as_uint(&w->num[LETTER('P')], turns) || *turns < 1 || *turns > LSM_GCODE_MAX_TURNS)
+            if (!as_uint(&w->pnum, turns) || *turns < 1 || *turns > LSM_GCODE_MAX_TURNS)
                 return fail_r(res, LSM_E_GC_BAD_VALUE, pcol, "arc turns P must be an integer 1..1000");
         } else if (g64 && w->val[LETTER('P')] < 0) {
             return fail_r(res, LSM_E_GC_BAD_VALUE, pcol, "negative blend tolerance");
@@ -736,14 +739,14 @@ static lsm_status exec_g10(const lsm_gcode *p, const gc_words *w, gc_exec *x, ls
     uint32_t l = 0, sys = 0;
     if (!(w->seen & BIT('L')))
         return fail_r(res, LSM_E_GC_MISSING_ARG, col, "G10 needs L2 or L20");
-    if (!as_uint(&w->num[LETTER('L')], &l) || (l != 2 && l != 20)) {
+    if (!as_uint(&w->lnum, &l) || (l != 2 && l != 20)) {
         const bool tool = l == 1 || l == 10 || l == 11;
         return fail_r(res, tool ? LSM_E_GC_UNSUPPORTED : LSM_E_GC_BAD_VALUE, w->col[LETTER('L')],
                       tool ? "unsupported: tool table (G10 L1/L10/L11)" : "G10 needs L2 or L20");
     }
     if (!(w->seen & BIT('P')))
         return fail_r(res, LSM_E_GC_MISSING_ARG, col, "G10 needs P (coordinate system 0..6)");
-    if (!as_uint(&w->num[LETTER('P')], &sys) || sys > 9)
+    if (!as_uint(&w->pnum, &sys) || sys > 9)
         return fail_r(res, LSM_E_GC_BAD_VALUE, w->col[LETTER('P')], "coordinate system P must be 0..9");
     if (sys > LSM_GCODE_N_WCS)
         return fail_r(res, LSM_E_GC_UNSUPPORTED, w->col[LETTER('P')], "unsupported: coordinate systems G59.1-G59.3");

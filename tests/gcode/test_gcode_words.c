@@ -276,6 +276,43 @@ static void test_home_positions(void **state)
     near(r.blocks[1].end[0], 0);
     near(r.blocks[1].end[2], 30);
     assert_int_equal(r.blocks[1].type, LSM_GCODE_BLOCK_RAPID);
+    /* G30.1 stores G30's position; G28's stays */
+    ok("G0 X7 Y8 Z9", &r);
+    ok("G30.1", &r);
+    ok("G0 X0 Y0 Z0", &r);
+    ok("G30", &r);
+    near(r.blocks[0].end[0], 7);
+    near(r.blocks[0].end[2], 9);
+    ok("G28", &r);
+    near(r.blocks[0].end[0], 10);
+    assert_int_equal(r.nonmodal, 280);
+    expect_text("G28.1 X1", LSM_E_GC_UNUSED_WORD, 7, "axis words with G28.1, G30.1 or G92.1 'X1'");
+}
+
+static void test_every_work_offset(void **state)
+{
+    (void)state;
+    start(NULL);
+    lsm_gcode_result r;
+    static const char *sel[6] = {"G54", "G55", "G56", "G57", "G58", "G59"};
+    char text[48];
+    for (int k = 0; k < 6; k++) {
+        snprintf(text, sizeof text, "G10 L2 P%d Y%d", k + 1, 10 * (k + 1));
+        ok(text, &r);
+    }
+    for (int k = 0; k < 6; k++) {
+        snprintf(text, sizeof text, "%s G0 Y1", sel[k]);
+        ok(text, &r);
+        assert_int_equal(r.modal.wcs, k + 1);
+        near(r.blocks[0].end[1], 10 * (k + 1) + 1);
+    }
+    ok("G92 Y0", &r); /* G92.2 clears like G92.1 */
+    ok("G0 Y1", &r);
+    near(r.blocks[0].end[1], 62);
+    ok("G92.2", &r);
+    ok("G0 Y3", &r);
+    assert_int_equal(r.n_blocks, 1);
+    near(r.blocks[0].end[1], 63);
 }
 
 static void test_error_texts(void **state)
@@ -333,7 +370,8 @@ int main(void)
         cmocka_unit_test(test_events_in_linuxcnc_order), cmocka_unit_test(test_end_stops_spindle_and_coolant),
         cmocka_unit_test(test_pauses_and_dwell),         cmocka_unit_test(test_preamble_and_g80),
         cmocka_unit_test(test_full_circle_without_end_words), cmocka_unit_test(test_work_offsets),
-        cmocka_unit_test(test_home_positions),           cmocka_unit_test(test_error_texts),
+        cmocka_unit_test(test_home_positions),           cmocka_unit_test(test_every_work_offset),
+        cmocka_unit_test(test_error_texts),
         cmocka_unit_test(test_refused_line_changes_nothing),
     };
     return cmocka_run_group_tests_name(LSM_REAL_IS_FLOAT ? "gcode_words_float" : "gcode_words", tests, NULL, NULL);

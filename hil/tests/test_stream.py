@@ -8,6 +8,7 @@ import struct
 import subprocess
 import time
 
+import canopen
 import numpy as np
 import pytest
 
@@ -42,6 +43,18 @@ def _stream(rig, text, tmp_path, extra=(), **kw):
                             text=True, **kw)
 
 
+def _read(fn):
+    """A rig read after the stream ended: an answer the node sent late to the tool (which asked again after a
+    time-out on a loaded host) may still arrive on the shared SDO channel; python-canopen then raises, and the read
+    is asked once more."""
+    time.sleep(0.5)
+    try:
+        return fn()
+    except canopen.SdoCommunicationError:
+        time.sleep(1.0)
+        return fn()
+
+
 def _path_state_frames(rig, since):
     cob = 0x280 + rig.node_id
     return [f.data[0] for f in rig.frames.select(lambda f: f.id == cob and len(f.data) == 7, since)]
@@ -74,9 +87,9 @@ def test_stream_program(rig, tmp_path):
                           "line 5: M3 spindle_cw 8000 rpm", "line 6: M8 coolant_flood", "line 10: G4 dwell 0.300 s",
                           "line 13: M5 spindle_stop", "line 13: M9 coolant_off", "line 13: M30 end"]
     assert lines[-1].startswith("done: %d blocks" % N_BLOCKS) and lines[-1].endswith("X 0.0000 Y 0.0000 Z 0.0000")
-    assert [rig.demand(k) for k in range(3)] == rig.home, "the program's end, to the count"
-    assert rig.read(0x5004) == N_BLOCKS, "every block accepted once (a fresh node numbers from 1)"
-    assert rig.read(0x5002) == 0, "the stream leaves the path idle"
+    assert _read(lambda: [rig.demand(k) for k in range(3)]) == rig.home, "the program's end, to the count"
+    assert _read(lambda: rig.read(0x5004)) == N_BLOCKS, "every block accepted once (a fresh node numbers from 1)"
+    assert _read(lambda: rig.read(0x5002)) == 0, "the stream leaves the path idle"
     # the dwell (G4 P0.3, wall time on the master): at rest on X10 Y20 for it, sampled by TPDO3 every 50 ms
     rest = _rest_seconds(rig, mark, rig.home[0] + 10000, rig.home[1] + 20000)
     assert rest >= 0.3 - 2 * 0.05, "at rest %.3f s for a dwell of 0.3 s" % rest
@@ -123,7 +136,7 @@ def test_stream_hold_and_quick_stop(rig, tmp_path):
             p.kill()
     assert p.returncode == 130, err
     assert "feed hold" in err and "quick stop" in err
-    x = rig.demand(0) - rig.home[0]
+    x = _read(lambda: rig.demand(0)) - rig.home[0]
     assert 0 < x < 300000, "stopped at %d counts" % x
 
 

@@ -2,9 +2,10 @@
  * gcode.h: a streaming RS274/NGC subset parser, LinuxCNC dialect (lsm_gcode_*).
  *
  * Model. A program is a sequence of lines; each line is parsed as a whole and either applies
- * completely (modal state updated, zero or one motion block emitted) or not at all (an error with
+ * completely (modal state and offsets updated, up to two motion blocks and its machine-function events
+ * emitted) or not at all (an error with
  * its code, line and column; the parser state is left as it was before the line). The parser holds
- * no pointers and allocates nothing: the caller owns the `lsm_gcode` object (about 0.4 kB with the
+ * no pointers and allocates nothing: the caller owns the `lsm_gcode` object (580 B float, 848 B double, with the
  * default LSM_GCODE_MAX_LINE) and feeds it bytes, one line or any chunk at a time. It runs on the
  * MCU as well as on the host (no stdio, no strtod, no locale).
  *

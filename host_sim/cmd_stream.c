@@ -698,6 +698,25 @@ int cmd_stream(int argc, char **argv)
     s.tol_mm = tol;
     s.rapid_mm_s = rapid;
     int rc = 0;
+    { /* the program first, before the bus is touched (all six axes; the node's axes are checked again below) */
+        stream pre;
+        memset(&pre, 0, sizeof pre);
+        pre.n_axes = ST_MAX_AXES;
+        pre.tol_mm = tol;
+        pre.rapid_mm_s = rapid;
+        for (int k = 0; k < ST_MAX_AXES; k++)
+            pre.cpm[k] = 1;
+        const double zero[ST_MAX_AXES] = {0};
+        const int errors = load_program(&pre, program, text, len, zero);
+        free(pre.b);
+        free(pre.e);
+        if (errors != 0) {
+            fprintf(stderr, errors < 0 ? "error: out of memory\n" : "%s: %d error(s): nothing was sent\n", program,
+                    errors);
+            free(text);
+            return EXIT_PROGRAM;
+        }
+    }
     if (co_master_open(&s.m, iface, (uint8_t)node_id) != 0) {
         fprintf(stderr, "error: %s\n", s.m.err);
         free(text);

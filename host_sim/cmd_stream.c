@@ -198,7 +198,6 @@ static int add_gcode_block(stream *s, const lsm_gcode_block *g, const lsm_gcode_
                       g->line);
     const int plane = g->plane == LSM_GCODE_PLANE_XY ? 0 : g->plane == LSM_GCODE_PLANE_ZX ? 1 : 2;
     const int type = g->dir < 0 ? 2 : 3;
-    static const int normal[3] = {2, 1, 0};
     for (uint32_t t = 1; t <= g->turns; t++) {
         /* after t full turns: the plane's point is the start again, the other axes have moved t 2 pi / angle */
         const double f = 2 * LSM_PI * t / g->angle_rad;
@@ -208,7 +207,6 @@ static int add_gcode_block(stream *s, const lsm_gcode_block *g, const lsm_gcode_
         static const int pa[3] = {0, 2, 1}, pb[3] = {1, 0, 2};
         e[pa[plane]] = g->start[pa[plane]];
         e[pb[plane]] = g->start[pb[plane]];
-        (void)normal;
         if (encode(s, type, plane, e, g->centre, g->feed_mm_s, tol, g->line) != 0)
             return -1;
     }

@@ -101,7 +101,7 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
     const lsm_axprof_limits e = lsm_axprof_effective(lim, p->cycle_s);
     const lsm_jstop_limits sl = {e.a_max_mm_s2, e.j_max_mm_s3, e.snap_max_mm_s4};
     if (p->mode == LSM_AXPROF_MOVE) {
-        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, &sl);
+        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, &sl);
         if (st != LSM_OK)
             return st;
         p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
@@ -127,7 +127,7 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
         p->stop_kind = kind; /* the running stop is already at least as fast */
         return LSM_OK;
     }
-    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, lim);
+    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
     if (st != LSM_OK)
         return st;
     p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;

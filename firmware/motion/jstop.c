@@ -116,13 +116,20 @@ static lsm_real intermediate(lsm_real vt, lsm_real at, const lsm_jstop_limits *l
     return (lo + hi) / 2;
 }
 
-lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2,
+/* The direction of travel of a state: that of v, else of a, else of j. */
+static lsm_real direction(lsm_real v, lsm_real a, lsm_real j)
+{
+    const lsm_real x = v != 0 ? v : a != 0 ? a : j;
+    return x > 0 ? 1 : -1;
+}
+
+lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
                           const lsm_jstop_limits *lim)
 {
     if (s == NULL || lim == NULL)
         return LSM_E_NULL;
-    const lsm_real in[6] = {p_mm, v_mm_s, a_mm_s2, lim->decel_mm_s2, lim->jerk_mm_s3, lim->snap_mm_s4};
-    for (int i = 0; i < 6; i++) {
+    const lsm_real in[7] = {p_mm, v_mm_s, a_mm_s2, j_mm_s3, lim->decel_mm_s2, lim->jerk_mm_s3, lim->snap_mm_s4};
+    for (int i = 0; i < 7; i++) {
         int st = lsm_check_finite(in[i]);
         if (st != 0)
             return (lsm_status)st;
@@ -133,19 +140,24 @@ lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real
     s->lim = *lim;
     s->origin_mm = p_mm;
     s->dir = 1;
-    if (v_mm_s == 0 && a_mm_s2 == 0)
+    if (v_mm_s == 0 && a_mm_s2 == 0 && j_mm_s3 == 0)
         return LSM_OK; /* at rest: nothing to do */
-    s->dir = v_mm_s > 0 ? 1 : v_mm_s < 0 ? -1 : (a_mm_s2 > 0 ? 1 : -1);
-    const lsm_real vt = s->dir * v_mm_s, at = s->dir * a_mm_s2;
+    s->dir = direction(v_mm_s, a_mm_s2, j_mm_s3);
+    s->start[0].s_mm = 0;
+    s->start[0].v_mm_s = s->dir * v_mm_s;
+    s->start[0].a_mm_s2 = s->dir * a_mm_s2;
+    s->start[0].j_mm_s3 = s->dir * j_mm_s3;
+    lsm_kin k0 = s->start[0];
+    if (j_mm_s3 != 0) { /* release the jerk first (jstop.h) */
+        add_phase(s, LSM_PHASE_FALL, (lsm_real)LSM_PI * lsm_fabs(j_mm_s3) / (2 * lim->snap_mm_s4), k0.j_mm_s3);
+        if (s->n_phases > 0u)
+            advance(s, 0, s->dur_s[0], &k0);
+    }
     lsm_real tb;
-    const lsm_real a1 = intermediate(vt, at, lim, &tb);
-    add_ramp(s, at, a1);
+    const lsm_real a1 = intermediate(k0.v_mm_s, k0.a_mm_s2, lim, &tb);
+    add_ramp(s, k0.a_mm_s2, a1);
     add_phase(s, LSM_PHASE_CONST, tb, 0);
     add_ramp(s, a1, 0);
-    s->start[0].s_mm = 0;
-    s->start[0].v_mm_s = vt;
-    s->start[0].a_mm_s2 = at;
-    s->start[0].j_mm_s3 = 0;
     s->t_end_s = 0;
     for (unsigned i = 0; i < s->n_phases; i++) {
         advance(s, i, s->dur_s[i], &s->start[i + 1]);
@@ -240,7 +252,7 @@ bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out)
     if (lsm_fabs(v_end) > JSTOP_OVERSHOOT_REL * scale) {
         /* overshoot stage done: stop again from (p_end, v_end, 0) with the rest of this cycle */
         const lsm_jstop_limits lim = s->lim;
-        if (lsm_jstop_plan(s, p_end, v_end, 0, &lim) == LSM_OK && s->active)
+        if (lsm_jstop_plan(s, p_end, v_end, 0, 0, &lim) == LSM_OK && s->active)
             return lsm_jstop_step(s, past, out);
     }
     rest_at(s, p_end, out);

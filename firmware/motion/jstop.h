@@ -1,8 +1,11 @@
 /*
  * jstop.h: a jerk- and snap-limited stop of one coordinate from any kinematic state (lsm_jstop_*).
  *
- * Model. From the state (v0, a0) at the moment the stop is requested, the coordinate is brought to v = a = 0
- * with the acceleration shaped like the sin² S-curve of scurve.h (Kombarov eq 6): three segments
+ * Model. From the state (v0, a0, j0) at the moment the stop is requested, the coordinate is brought to
+ * v = a = j = 0 with the acceleration shaped like the sin² S-curve of scurve.h (Kombarov eq 6). A jerk j0 != 0
+ * (a stop requested inside a jerk phase of a move) is first released to 0 with a cos² fall of j0 within the snap
+ * limit (duration pi |j0| / (2 S), eq 22: no jump in jerk, so the snap stays bounded); the stop is then planned
+ * from the state at its end (v0', a0'), with j = 0, in three segments
  *
  *      a |                                      A: ramp a0 -> a1   (jerk pulse: sin² rise, plateau, cos² fall)
  *     a0 |\                                     B: constant a1 for tB (only when a1 = -D is reached)
@@ -23,7 +26,8 @@
  * limits can undo in time: ramping the acceleration to 0 as fast as allowed takes it slightly through v = 0,
  * and a second stop (in the other direction) follows at once. The durations are real numbers (not whole
  * cycles); the state is evaluated in closed form (scurve.h's phase shapes, eq 15) at every cycle and the last
- * cycle lands on the exact end. No limit is ever exceeded: |a| <= max(|a0|, D), |j| <= J, |snap| <= S.
+ * cycle lands on the exact end. No limit is ever exceeded: |a| <= max(|a0'|, D), |j| <= max(|j0|, J),
+ * |snap| <= S, with |a0'| <= |a0| + pi j0² / (4 S) (the jerk release adds j0 pi |j0| / (4 S) to a).
  * Time: the double build counts the time since the start of the stop; the float build counts it from the start
  * of the present phase, since a float clock of tens of seconds would make the steps uneven by a percent (the
  * ulp of 44 s is 4 µs) and the sampled jerk would step by more than S dt.
@@ -51,7 +55,7 @@ typedef struct lsm_jstop_limits {
     lsm_real snap_mm_s4;   /* S > 0 */
 } lsm_jstop_limits;
 
-#define LSM_JSTOP_PHASES 7  /* two ramps of three phases and the plateau between them */
+#define LSM_JSTOP_PHASES 8  /* the jerk release, two ramps of three phases and the plateau between them */
 
 typedef struct lsm_jstop {
     lsm_jstop_limits lim;
@@ -69,9 +73,9 @@ typedef struct lsm_jstop {
     bool active;
 } lsm_jstop;
 
-/* Plans a stop from (p, v, a). Errors: LSM_E_NULL, LSM_E_NAN/LSM_E_INF (state or limits), LSM_E_LIMIT
- * (a limit <= 0). A state at rest (v = a = 0) gives an inactive stop (nothing to do). Control cycle. */
-lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2,
+/* Plans a stop from (p, v, a, j). Errors: LSM_E_NULL, LSM_E_NAN/LSM_E_INF (state or limits), LSM_E_LIMIT
+ * (a limit <= 0). A state at rest (v = a = j = 0) gives an inactive stop (nothing to do). Control cycle. */
+lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
                           const lsm_jstop_limits *lim);
 
 /* Advances dt_s seconds and writes the state (axis frame). Returns true while stopping; at the end it writes

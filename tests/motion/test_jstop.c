@@ -43,14 +43,18 @@ static double urand(uint64_t *s)
     return (double)(*s >> 11) / 9007199254740992.0;
 }
 
-/* Runs a stop to its end; checks the limits cycle by cycle. Returns the number of cycles. */
-static unsigned run_stop(double p, double v, double a, const lsm_jstop_limits *l, double dt, double *p_end)
+/* Runs a stop from (p, v, a, j) to its end; checks the limits cycle by cycle, the sampled jerk change also from
+ * the starting jerk j to the first sample. Returns the number of cycles. */
+static unsigned run_stop_j(double p, double v, double a, double j, const lsm_jstop_limits *l, double dt,
+                           double *p_end)
 {
     lsm_jstop s;
-    assert_int_equal(lsm_jstop_plan(&s, p, v, a, l), LSM_OK);
-    const double amax = fmax(fabs(a), l->decel_mm_s2) * (1 + TOL_REL);
-    double pp = p, pv = v, pj = 0;
-    bool first = true;
+    assert_int_equal(lsm_jstop_plan(&s, p, v, a, j, l), LSM_OK);
+    /* the jerk release adds at most pi j² / (4 S) to |a| (jstop.h) */
+    const double amax = fmax(fabs(a) + LSM_PI * j * j / (4 * l->snap_mm_s4), l->decel_mm_s2) * (1 + TOL_REL);
+    const double jmax = fmax(fabs(j), l->jerk_mm_s3) * (1 + TOL_REL);
+    double pp = p, pv = v, pj = j;
+    bool first = false;
     unsigned n = 0;
     lsm_kin k;
     bool running = true;
@@ -58,7 +62,7 @@ static unsigned run_stop(double p, double v, double a, const lsm_jstop_limits *l
         running = lsm_jstop_step(&s, dt, &k);
         n++;
         assert_true(n < 10000000u);
-        assert_true(fabs(k.j_mm_s3) <= l->jerk_mm_s3 * (1 + TOL_REL));
+        assert_true(fabs(k.j_mm_s3) <= jmax);
         assert_true(fabs(k.a_mm_s2) <= amax);
         if (!first && running) /* sampled jerk changes at most S per second */
             assert_true(fabs(k.j_mm_s3 - pj) <= l->snap_mm_s4 * dt * (1 + 1e-6) + TOL_REL * l->jerk_mm_s3);
@@ -77,13 +81,18 @@ static unsigned run_stop(double p, double v, double a, const lsm_jstop_limits *l
     return n;
 }
 
+static unsigned run_stop(double p, double v, double a, const lsm_jstop_limits *l, double dt, double *p_end)
+{
+    return run_stop_j(p, v, a, 0, l, dt, p_end);
+}
+
 static void test_constant_jerk_limit(void **state)
 {
     (void)state;
     /* huge D and S: the stop from (v, 0) is two constant-jerk ramps: t = 2 sqrt(v / J), distance v t / 2 */
     lsm_jstop_limits l = {1e12, 1000, 1e15};
     lsm_jstop s;
-    assert_int_equal(lsm_jstop_plan(&s, 0, 10, 0, &l), LSM_OK);
+    assert_int_equal(lsm_jstop_plan(&s, 0, 10, 0, 0, &l), LSM_OK);
     assert_true(fabs(s.t_end_s - 2 * sqrt(10.0 / 1000)) < 1e-6);
     lsm_kin e;
     lsm_jstop_eval(&s, s.t_end_s, &e);
@@ -112,14 +121,15 @@ static void test_at_rest(void **state)
     (void)state;
     lsm_jstop_limits l = {1000, 1e5, 1e9};
     lsm_jstop s;
-    assert_int_equal(lsm_jstop_plan(&s, 3, 0, 0, &l), LSM_OK);
+    assert_int_equal(lsm_jstop_plan(&s, 3, 0, 0, 0, &l), LSM_OK);
     lsm_kin k;
     assert_false(lsm_jstop_step(&s, 0.001, &k));
     assert_true(k.s_mm == 3 && k.v_mm_s == 0);
     lsm_jstop_limits bad = {0, 1, 1};
-    assert_int_equal(lsm_jstop_plan(&s, 0, 1, 0, &bad), LSM_E_LIMIT);
+    assert_int_equal(lsm_jstop_plan(&s, 0, 1, 0, 0, &bad), LSM_E_LIMIT);
     lsm_jstop_limits nan_l = {NAN, 1, 1};
-    assert_int_equal(lsm_jstop_plan(&s, 0, 1, 0, &nan_l), LSM_E_NAN);
+    assert_int_equal(lsm_jstop_plan(&s, 0, 1, 0, 0, &nan_l), LSM_E_NAN);
+    assert_int_equal(lsm_jstop_plan(&s, 0, 1, 0, NAN, &l), LSM_E_NAN);
 }
 
 static void test_random_states(void **state)
@@ -134,12 +144,19 @@ static void test_random_states(void **state)
         const double v = (urand(&r) - 0.5) * 2 * pow(10, 3 * urand(&r));
         /* the acceleration of a state a limited profile can reach: |a| up to 1.5 D, either sign */
         const double a = (urand(&r) - 0.5) * 3 * l.decel_mm_s2 * (urand(&r) < 0.2 ? 0 : 1);
+        /* a stop requested inside a jerk phase of a move: |j| up to J, either sign */
+        const double j = (urand(&r) - 0.5) * 2 * l.jerk_mm_s3 * (urand(&r) < 0.3 ? 0 : 1);
         const double dt = urand(&r) < 0.5 ? 0.001 : 0.00025;
         double pe;
-        unsigned n = run_stop(0, v, a, &l, dt, &pe);
-        /* an upper bound of the stop time: ramp a to -D, brake at D from at most |v| + a^2/(2J) */
-        double t_bound = 2 * lsm_jstop_ramp_time(fabs(a) + l.decel_mm_s2, l.jerk_mm_s3, l.snap_mm_s4, NULL, NULL, NULL) +
-                         (fabs(v) + a * a / l.jerk_mm_s3) / l.decel_mm_s2 + 4 * dt;
+        unsigned n = run_stop_j(0, v, a, j, &l, dt, &pe);
+        /* an upper bound of the stop time: release j, ramp a to -D, brake at D from at most |v| + a^2/(2J)
+         * (with a and v after the release) */
+        const double t_rel = LSM_PI * fabs(j) / (2 * l.snap_mm_s4);
+        const double a_rel = fabs(a) + fabs(j) * t_rel / 2;
+        const double v_rel = fabs(v) + a_rel * t_rel;
+        double t_bound = t_rel +
+                         2 * lsm_jstop_ramp_time(a_rel + l.decel_mm_s2, l.jerk_mm_s3, l.snap_mm_s4, NULL, NULL, NULL) +
+                         (v_rel + a_rel * a_rel / l.jerk_mm_s3) / l.decel_mm_s2 + 4 * dt;
         assert_true((double)n * dt <= t_bound * 2 + 0.01);
     }
 }
@@ -191,6 +208,21 @@ static void test_prof_move_and_stop(void **state)
         pj = p.k.j_mm_s3;
     }
     assert_true(p.k.s_mm < 100.0 && p.k.v_mm_s == 0);
+    /* a stop inside the first jerk phase of a move: the jerk is released, it never jumps (snap of the stop) */
+    lsm_axprof_init(&p, 0.001, 0.0);
+    assert_int_equal(lsm_axprof_move(&p, 100.0, &lim), LSM_OK);
+    for (int i = 0; i < 12; i++)
+        lsm_axprof_step(&p);
+    assert_true(fabs(p.k.j_mm_s3) > 1e3);
+    assert_int_equal(lsm_axprof_stop(&p, &sl, 3), LSM_OK);
+    pj = p.k.j_mm_s3;
+    while (!lsm_axprof_at_rest(&p)) {
+        lsm_axprof_step(&p);
+        assert_true(fabs(p.k.j_mm_s3) <= 2e4 * (1 + TOL_REL));
+        assert_true(fabs(p.k.j_mm_s3 - pj) <= 2e6 * 0.001 * (1 + 1e-6) + TOL_J_ABS);
+        pj = p.k.j_mm_s3;
+    }
+    assert_true(p.k.v_mm_s == 0 && p.k.s_mm > 0);
     /* retarget while cruising: continues without stopping (the velocity never drops to 0 before the end) */
     lsm_axprof_init(&p, 0.001, 0.0);
     assert_int_equal(lsm_axprof_move(&p, 100.0, &lim), LSM_OK);

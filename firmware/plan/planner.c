@@ -402,6 +402,6 @@ void lsm_planner_apply_requests(lsm_planner *pl)
 
 void lsm_pl_mark_stale(lsm_planner *pl)
 {
-    if (!lsm_planner_piece_stale(pl))
-        lsm_atomic_put_release(&pl->stale_set, lsm_atomic_get(&pl->stale_set) + 1u);
+    /* counted even when already stale: a piece planned before this change must not clear it when taken */
+    lsm_atomic_put_release(&pl->stale_set, lsm_atomic_get(&pl->stale_set) + 1u);
 }

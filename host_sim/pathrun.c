@@ -183,6 +183,20 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
     return 0;
 }
 
+/* The centre of an arc in double (geom.h: the float build stores the start point; its centre is computed here
+ * in double from the stored start, radius and phi0, so that distances are not limited by a float centre). */
+static void sim_arc_centre(const lsm_geom_arc *a, double c[3])
+{
+#if LSM_REAL_IS_FLOAT
+    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
+    for (int i = 0; i < 3; i++)
+        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
+#else
+    for (int i = 0; i < 3; i++)
+        c[i] = a->centre_mm[i];
+#endif
+}
+
 /* Distance (X Y Z) from x to one path element. */
 static double dist_elem(const lsm_geom *g, const double x[3])
 {
@@ -203,7 +217,9 @@ static double dist_elem(const lsm_geom *g, const double x[3])
     const lsm_geom_arc *a = &g->u.arc;
     double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                    a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
-    double d[3] = {x[0] - a->centre_mm[0], x[1] - a->centre_mm[1], x[2] - a->centre_mm[2]};
+    double ac[3];
+    sim_arc_centre(a, ac);
+    double d[3] = {x[0] - ac[0], x[1] - ac[1], x[2] - ac[2]};
     const double u = d[0] * a->e1[0] + d[1] * a->e1[1] + d[2] * a->e1[2];
     const double w = d[0] * a->e2[0] + d[1] * a->e2[1] + d[2] * a->e2[2];
     const double phi = atan2(w, u);
@@ -216,7 +232,7 @@ static double dist_elem(const lsm_geom *g, const double x[3])
         const double ph = a->phi0_rad + sg * t, f = t / sw;
         double q[3];
         for (int i = 0; i < 3; i++)
-            q[i] = a->centre_mm[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
+            q[i] = ac[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
         const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
         if (r < best)
             best = r;

@@ -94,6 +94,46 @@ static lsm_real geom_wrap_2pi(lsm_real a) /* to [0, 2 pi) */
     return a;
 }
 
+/* May the centre move by t along the chord (rounded I J K, geom.h)? The points of the arc then move by about
+ * |t| sin(half the sweep) <= |t| chord / (2 r) (minor arcs): the float build bounds that by the tolerance (a float
+ * centre of a large radius is off by ulp(r), so t reaches millimetres while the path moves by a fraction of a
+ * micrometre); the double build bounds t itself. */
+static bool geom_shift_ok(lsm_real t, lsm_real chord, lsm_real r)
+{
+#if LSM_REAL_IS_FLOAT
+    const lsm_real f = chord < LSM_R(2.0) * r ? chord / (LSM_R(2.0) * r) : LSM_R(1.0);
+    return lsm_fabs(t) * f <= (lsm_real)LSM_GEOM_ARC_TOL_MM && lsm_fabs(t) <= LSM_R(0.5) * r;
+#else
+    (void)chord;
+    (void)r;
+    return lsm_fabs(t) <= (lsm_real)LSM_GEOM_ARC_TOL_MM;
+#endif
+}
+
+/* The swept angle (>= 0, before full turns) from start to end in the direction dir. Float, with both points on the
+ * circle (r1 == r2 after the centre moved onto the bisector): from the chord d and X = (start - c) x d,
+ * 2 atan2(|d|²/2, dir X), free of the difference of two nearly equal angles that loses sweep / ulp(phi) of its
+ * precision for a large radius. Otherwise (and in double) the difference of the end angles. */
+static lsm_real geom_arc_sweep(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3],
+                               const lsm_real e2[3], lsm_real u1, lsm_real v1, lsm_real u2, lsm_real v2, lsm_real r1,
+                               lsm_real r2, int dir)
+{
+#if LSM_REAL_IS_FLOAT
+    if (lsm_fabs(r1 - r2) <= LSM_R(4.0) * LSM_REAL_EPS * r1) {
+        const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
+        const lsm_real du = dot3(d, e1), dv = dot3(d, e2);
+        const lsm_real X = u1 * dv - v1 * du;
+        const lsm_real c2 = du * du + dv * dv;
+        if (c2 > LSM_R(0.0))
+            return LSM_R(2.0) * lsm_atan2(LSM_R(0.5) * c2, dir > 0 ? X : -X);
+    }
+#else
+    (void)start, (void)end, (void)e1, (void)e2, (void)r1, (void)r2;
+#endif
+    const lsm_real phi0 = lsm_atan2(v1, u1), phi1 = lsm_atan2(v2, u2);
+    return geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+}
+
 static void geom_arc_len(lsm_geom *g)
 {
     const lsm_real a = g->u.arc.radius_mm * g->u.arc.sweep_rad, b = g->u.arc.axial_mm;
@@ -138,7 +178,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
         const lsm_real chord = lsm_sqrt(du * du + dv * dv);
         if (r1 != r2 && chord > LSM_R(16.0) * LSM_REAL_EPS * r1) {
             const lsm_real t = (r2 - r1) * (r2 + r1) / (LSM_R(2.0) * chord);
-            if (lsm_fabs(t) <= (lsm_real)LSM_GEOM_ARC_TOL_MM) {
+            if (geom_shift_ok(t, chord, r1)) {
                 const lsm_real su = t * du / chord, sv = t * dv / chord;
                 u1 -= su, v1 -= sv, u2 -= su, v2 -= sv;
                 for (int i = 0; i < 3; i++)
@@ -149,8 +189,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
         }
     }
     const lsm_real phi0 = lsm_atan2(v1, u1);
-    const lsm_real phi1 = lsm_atan2(v2, u2);
-    lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+    lsm_real sweep = geom_arc_sweep(start, end, e1, e2, u1, v1, u2, v2, r1, r2, dir);
     /* end == start (to rounding) is a full circle */
     const lsm_real cu = u2 - u1, cv = v2 - v1;
     if (sweep == LSM_R(0.0) || lsm_sqrt(cu * cu + cv * cv) <= LSM_R(16.0) * LSM_REAL_EPS * r1)
@@ -162,7 +201,13 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->reserved = 0;
     const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
+#if LSM_REAL_IS_FLOAT
+        g->u.arc.start_mm[i] = start[i];
+        (void)cshift;
+        (void)ns;
+#else
         g->u.arc.centre_mm[i] = centre[i] + cshift[i] + ns * n[i];
+#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -200,8 +245,16 @@ lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], cons
     g->plane = LSM_GEOM_PLANE_GENERAL;
     g->rotary_only = 0;
     g->reserved = 0;
+#if LSM_REAL_IS_FLOAT
+    lsm_real sp, cp;
+    lsm_sincos(phi0_rad, &sp, &cp);
+#endif
     for (int i = 0; i < 3; i++) {
+#if LSM_REAL_IS_FLOAT
+        g->u.arc.start_mm[i] = centre[i] + radius_mm * (cp * e1[i] + sp * e2[i]);
+#else
         g->u.arc.centre_mm[i] = centre[i];
+#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -252,6 +305,36 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
 
 static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3]) { cross3(a->e1, a->e2, n); }
 
+#if LSM_REAL_IS_FLOAT
+/* The in-plane chord from the start to the angle phi0 + dphi: 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 +
+ * cos(phi0 + dphi/2) e2), to a few ulp of its length. */
+static void geom_arc_chord(const lsm_geom_arc *a, lsm_real dphi, lsm_real c[3])
+{
+    const lsm_real h = LSM_R(0.5) * dphi;
+    lsm_real sh, ch, sm, cm;
+    lsm_sincos(h, &sh, &ch);
+    lsm_sincos(a->phi0_rad + h, &sm, &cm);
+    const lsm_real k = LSM_R(2.0) * a->radius_mm * sh;
+    for (int i = 0; i < 3; i++)
+        c[i] = k * (cm * a->e2[i] - sm * a->e1[i]);
+    (void)ch;
+}
+#endif
+
+void lsm_geom_arc_centre(const lsm_geom *g, lsm_real c[3])
+{
+    const lsm_geom_arc *a = &g->u.arc;
+#if LSM_REAL_IS_FLOAT
+    lsm_real sp, cp;
+    lsm_sincos(a->phi0_rad, &sp, &cp);
+    for (int i = 0; i < 3; i++)
+        c[i] = a->start_mm[i] - a->radius_mm * (cp * a->e1[i] + sp * a->e2[i]);
+#else
+    for (int i = 0; i < 3; i++)
+        c[i] = a->centre_mm[i];
+#endif
+}
+
 lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXES], lsm_real tan[3], lsm_real curv[3])
 {
     if (g == NULL)
@@ -284,10 +367,20 @@ lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXE
         lsm_real n[3];
         geom_arc_normal(a, n);
         const lsm_real w = a->sweep_rad / g->len; /* dphi/ds */
+#if LSM_REAL_IS_FLOAT
+        lsm_real chord[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+        if (pos)
+            geom_arc_chord(a, a->sweep_rad * f, chord);
+#endif
         for (int i = 0; i < 3; i++) {
             const lsm_real radial = co * a->e1[i] + si * a->e2[i];
+#if LSM_REAL_IS_FLOAT
+            if (pos)
+                pos[i] = a->start_mm[i] + chord[i] + n[i] * a->axial_mm * f;
+#else
             if (pos)
                 pos[i] = a->centre_mm[i] + a->radius_mm * radial + n[i] * a->axial_mm * f;
+#endif
             if (tan)
                 tan[i] = w * a->radius_mm * (-si * a->e1[i] + co * a->e2[i]) + n[i] * a->axial_mm / g->len;
             if (curv)
@@ -372,8 +465,15 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
         const lsm_real f = d / g->len;
         lsm_real n[3];
         geom_arc_normal(a, n);
+#if LSM_REAL_IS_FLOAT
+        lsm_real p[LSM_MAX_AXES];
+        (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
+        for (int i = 0; i < 3; i++)
+            a->start_mm[i] = p[i];
+#else
         for (int i = 0; i < 3; i++)
             a->centre_mm[i] += n[i] * a->axial_mm * f;
+#endif
         a->phi0_rad += a->sweep_rad * f;
         a->sweep_rad -= a->sweep_rad * f;
         a->axial_mm -= a->axial_mm * f;

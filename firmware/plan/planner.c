@@ -508,8 +508,9 @@ static lsm_status append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         for (int i = 0; i < LSM_MAX_AXES; i++)
             p[i] = pl->tail_pos[i];
         (void)lsm_geom_eval(g, g->len, p, NULL, NULL);
-        /* a geometric end within rounding of the programmed one is the programmed one (exact program ends) */
-        lsm_real d2 = R0, sc = R1;
+        /* a geometric end within rounding of the programmed one is the programmed one (exact program ends): an arc's
+         * end carries the rounding of its radius too (double: its centre, R eps) */
+        lsm_real d2 = R0, sc = R1 + (g->kind == LSM_GEOM_ARC ? g->u.arc.radius_mm : R0);
         for (int i = 0; i < 3; i++) {
             d2 += (p[i] - prog_end[i]) * (p[i] - prog_end[i]);
             sc += lsm_fabs(prog_end[i]);

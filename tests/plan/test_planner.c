@@ -30,6 +30,7 @@
 #include <cmocka.h>
 
 #include "interp.h"
+#include "lsm_test_geom.h"
 #include "lsm_test_rng.h"
 #include "planner.h"
 
@@ -277,9 +278,10 @@ static double dist_geom(const lsm_geom *g, const double x[3])
         const double n[3] = {(double)a->e1[1] * (double)a->e2[2] - (double)a->e1[2] * (double)a->e2[1],
                              (double)a->e1[2] * (double)a->e2[0] - (double)a->e1[0] * (double)a->e2[2],
                              (double)a->e1[0] * (double)a->e2[1] - (double)a->e1[1] * (double)a->e2[0]};
-        double u = 0, v = 0, z = 0;
+        double u = 0, v = 0, z = 0, ac[3];
+        test_arc_centre(g, ac);
         for (int i = 0; i < 3; i++) {
-            const double r = x[i] - (double)a->centre_mm[i];
+            const double r = x[i] - ac[i];
             u += r * (double)a->e1[i];
             v += r * (double)a->e2[i];
             z += r * n[i];

@@ -110,29 +110,44 @@ static bool geom_shift_ok(lsm_real t, lsm_real chord, lsm_real r)
 #endif
 }
 
-/* The swept angle (>= 0, before full turns) from start to end in the direction dir. Float, with both points on the
- * circle (r1 == r2 after the centre moved onto the bisector): from the chord d and X = (start - c) x d,
- * 2 atan2(|d|²/2, dir X), free of the difference of two nearly equal angles that loses sweep / ulp(phi) of its
- * precision for a large radius. Otherwise (and in double) the difference of the end angles. */
-static lsm_real geom_arc_sweep(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3],
-                               const lsm_real e2[3], lsm_real u1, lsm_real v1, lsm_real u2, lsm_real v2, lsm_real r1,
-                               lsm_real r2, int dir)
-{
 #if LSM_REAL_IS_FLOAT
-    if (lsm_fabs(r1 - r2) <= LSM_R(4.0) * LSM_REAL_EPS * r1) {
-        const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
-        const lsm_real du = dot3(d, e1), dv = dot3(d, e2);
-        const lsm_real X = u1 * dv - v1 * du;
-        const lsm_real c2 = du * du + dv * dv;
-        if (c2 > LSM_R(0.0))
-            return LSM_R(2.0) * lsm_atan2(LSM_R(0.5) * c2, dir > 0 ? X : -X);
-    }
-#else
-    (void)start, (void)end, (void)e1, (void)e2, (void)r1, (void)r2;
-#endif
-    const lsm_real phi0 = lsm_atan2(v1, u1), phi1 = lsm_atan2(v2, u2);
-    return geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+/* Float: end and start are the same point in the plane, to the rounding of their coordinates (a full circle). Not
+ * 16 eps r, as in double: at R 6e4 that is 0.1 mm, and a programmed chord of 0.1 mm would turn a full circle. */
+static bool geom_same_point(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3], const lsm_real e2[3])
+{
+    const lsm_real su = dot3(start, e1), sv = dot3(start, e2), eu = dot3(end, e1), ev = dot3(end, e2);
+    const lsm_real sc = lsm_fabs(su) + lsm_fabs(sv) + lsm_fabs(eu) + lsm_fabs(ev);
+    return lsm_fabs(eu - su) + lsm_fabs(ev - sv) <= LSM_R(4.0) * LSM_REAL_EPS * sc;
 }
+
+/* Float: the circle through start and end whose centre is the point of the chord's bisector nearest the
+ * programmed centre, from the chord d = end - start and the programmed centre's offsets along d and across it,
+ *     h = (u1 dv - v1 du) / |d|   (its distance from the chord, > 0 on the left of d),
+ *     r = |d/2 + h n|,  phi0 = angle of the start seen from that centre,  sweep = 2 atan2(|d| / 2, dir h),
+ * with n the left normal of d. Every quantity is a product of the chord's size and the radius: no r1² - r2², no
+ * difference of two end angles, which in float carry ulp(r) / |d| of noise (a 0.2 mm centre shift and a 5e-4 rad
+ * turn of the arc at R 400 over a 0.05 mm chord). False (and nothing set) when the end is the start (a full
+ * circle) or the centre would move too far (geom_shift_ok): the programmed centre is kept. */
+static bool geom_arc_bisector(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3],
+                              const lsm_real e2[3], lsm_real u1, lsm_real v1, lsm_real r1, int dir, lsm_real *r,
+                              lsm_real *phi0, lsm_real *sweep)
+{
+    const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
+    const lsm_real du = dot3(d, e1), dv = dot3(d, e2);
+    const lsm_real c = lsm_sqrt(du * du + dv * dv);
+    if (geom_same_point(start, end, e1, e2))
+        return false;
+    const lsm_real h = (u1 * dv - v1 * du) / c;
+    const lsm_real t = -((u1 + LSM_R(0.5) * du) * du + (v1 + LSM_R(0.5) * dv) * dv) / c; /* the move along d */
+    if (!geom_shift_ok(t, c, r1))
+        return false;
+    const lsm_real cu = LSM_R(0.5) * du - h * dv / c, cv = LSM_R(0.5) * dv + h * du / c; /* centre - start */
+    *r = lsm_sqrt(cu * cu + cv * cv);
+    *phi0 = lsm_atan2(-cv, -cu);
+    *sweep = LSM_R(2.0) * lsm_atan2(LSM_R(0.5) * c, dir > 0 ? h : -h);
+    return true;
+}
+#endif
 
 static void geom_arc_len(lsm_geom *g)
 {
@@ -173,6 +188,9 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
      * the programmed end. Only while that shift stays within the radius tolerance (a nearly closed arc with
      * a short chord keeps the programmed centre, and its end is off by at most |r1 - r2|). */
     lsm_real cshift[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+#if LSM_REAL_IS_FLOAT
+    const lsm_real ds_u = u1, ds_v = v1, r1_prog = r1; /* the programmed centre (geom_arc_bisector) */
+#endif
     {
         const lsm_real du = u2 - u1, dv = v2 - v1;
         const lsm_real chord = lsm_sqrt(du * du + dv * dv);
@@ -188,12 +206,22 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
             }
         }
     }
-    const lsm_real phi0 = lsm_atan2(v1, u1);
-    lsm_real sweep = geom_arc_sweep(start, end, e1, e2, u1, v1, u2, v2, r1, r2, dir);
+    lsm_real phi0 = lsm_atan2(v1, u1);
+    const lsm_real phi1 = lsm_atan2(v2, u2);
+    lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+#if LSM_REAL_IS_FLOAT
+    (void)geom_arc_bisector(start, end, e1, e2, ds_u, ds_v, r1_prog, dir, &r1, &phi0, &sweep);
+#endif
     /* end == start (to rounding) is a full circle */
     const lsm_real cu = u2 - u1, cv = v2 - v1;
+#if LSM_REAL_IS_FLOAT
+    (void)cu, (void)cv;
+    if (sweep == LSM_R(0.0) || geom_same_point(start, end, e1, e2))
+        sweep = (lsm_real)(2.0 * LSM_PI);
+#else
     if (sweep == LSM_R(0.0) || lsm_sqrt(cu * cu + cv * cv) <= LSM_R(16.0) * LSM_REAL_EPS * r1)
         sweep = (lsm_real)(2.0 * LSM_PI);
+#endif
     sweep += (lsm_real)(2.0 * LSM_PI) * (lsm_real)turns;
     g->kind = LSM_GEOM_ARC;
     g->plane = (uint8_t)plane;

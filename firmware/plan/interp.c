@@ -9,6 +9,11 @@
 #define R0 LSM_R(0.0)
 #define R1 LSM_R(1.0)
 #define ARC_ANCHOR_CYCLES 256u
+#if LSM_REAL_IS_FLOAT
+#define PATH_DS(ip, ds) ((ds) * (ip)->ds_scale) /* interp.h: the piece's phases scaled to its length */
+#else
+#define PATH_DS(ip, ds) (ds)
+#endif
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
@@ -182,7 +187,15 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         return;
     if (!ip->act_ok || ip->act_blk != ip->blk)
         activate(ip); /* (re)started on a block that was never set up */
+#if LSM_REAL_IS_FLOAT
+    {
+        const lsm_real y = ds + ip->off_lo_mm, t = ip->off_mm + y;
+        ip->off_lo_mm = y - (t - ip->off_mm); /* exact when |off| >= |y| (Fast2Sum), and when off is 0 */
+        ip->off_mm = t;
+    }
+#else
     ip->off_mm += ds;
+#endif
     bool moved = false;
     while (ip->off_mm > b->g.len && ip->blk + 1u != pl->tail) {
         ip->off_mm -= b->g.len;
@@ -190,8 +203,10 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         b = bk(ip, ip->blk);
         moved = true;
     }
-    if (ip->off_mm > b->g.len)
+    if (ip->off_mm > b->g.len) {
         ip->off_mm = b->g.len;
+        ip->off_lo_mm = R0;
+    }
     if (moved) {
         lsm_planner_release(ip->pl, ip->blk);
         activate(ip);
@@ -226,6 +241,7 @@ static void place(lsm_interp *ip, uint32_t id, lsm_real off)
 {
     ip->blk = id;
     ip->off_mm = off;
+    ip->off_lo_mm = R0;
     lsm_planner_release(ip->pl, id);
     activate(ip);
     eval_pos(ip);
@@ -268,6 +284,12 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
     ip->phase = 0;
+#if LSM_REAL_IS_FLOAT
+    {
+        const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm;
+        ip->ds_scale = sum > pc->len_mm && pc->len_mm > R0 ? pc->len_mm / sum : R1;
+    }
+#endif
     ip->tau = R0;
     ip->sloc = R0;
     ip->rc = R1;
@@ -662,6 +684,7 @@ static void end_piece(lsm_interp *ip)
             const lsm_pblock *b = bk(ip, pl->tail - 1u);
             ip->blk = pl->tail - 1u;
             ip->off_mm = b ? b->g.len : R0;
+            ip->off_lo_mm = R0;
             lsm_planner_release(pl, ip->blk);
             activate(ip);
             if (CUR(ip).stop) {
@@ -709,21 +732,21 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 w.off = ip->hz_off;
                 w.v = ip->hz_v;
             } else { /* the start of a ramp: ds beyond the last sample */
-                ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off);
+                ahead(ip, ds > R0 ? PATH_DS(ip, ds) : R0, &w.blk, &w.off);
                 w.v = CUR(ip).st[ip->phase].v_mm_s;
             }
             const lsm_interp_prep *q = replacement_for(ip, &w);
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
-                advance_path(ip, ds);
+                advance_path(ip, PATH_DS(ip, ds));
                 ip->gen = ip->pl->gen; /* once per boundary: the current piece stays valid if none was found */
             }
             adv = left;
             continue;
         }
         if (!ended) {
-            advance_path(ip, ds);
+            advance_path(ip, PATH_DS(ip, ds));
             if (is_ramp_phase(ip->phase))
                 lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             else
@@ -763,6 +786,7 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl)
     ip->blk = pl->head;
     ip->off_mm = R0;
     ip->ovr = R1;
+    ip->ds_scale = R1;
     for (int i = 0; i < LSM_MAX_AXES; i++)
         ip->pos[i] = pl->tail_pos[i];
     if (pl->tail != pl->head) {
@@ -794,6 +818,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             if (id_lt_pub(ip->blk, pl->head)) {
                 ip->blk = pl->head;
                 ip->off_mm = R0;
+                ip->off_lo_mm = R0;
                 activate(ip);
             }
             swpt w;

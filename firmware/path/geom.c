@@ -391,7 +391,13 @@ lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXE
         const lsm_geom_arc *a = &g->u.arc;
         const lsm_real f = s / g->len;
         const lsm_real phi = a->phi0_rad + a->sweep_rad * f;
+#if LSM_REAL_IS_FLOAT
+        lsm_real co = LSM_R(0.0), si = LSM_R(0.0);
+        if (tan || curv) /* (the position comes from the chord) */
+            lsm_sincos(phi, &si, &co);
+#else
         const lsm_real co = lsm_cos(phi), si = lsm_sin(phi);
+#endif
         lsm_real n[3];
         geom_arc_normal(a, n);
         const lsm_real w = a->sweep_rad / g->len; /* dphi/ds */

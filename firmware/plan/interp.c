@@ -85,24 +85,34 @@ static void block_end(const lsm_interp *ip, uint32_t id, lsm_real e[3])
     }
 }
 
-/* Sets the float arc anchor at the cursor (interp.h). */
+/* Sets the float arc anchor at the cursor (interp.h); the end correction is computed afresh on a block's entry and
+ * when its length changed (a trim), else kept from the previous anchor. */
 static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
 {
     const lsm_geom_arc *a = &g->u.arc;
+    const lsm_real n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
+                           a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
+    lsm_real c[3];
+    if (ip->anchor == 0u || g->len != ip->a_len) {
+        lsm_real pe[LSM_MAX_AXES], e[3];
+        (void)lsm_geom_eval(g, g->len, pe, NULL, NULL);
+        block_end(ip, ip->blk, e);
+        for (int i = 0; i < 3; i++)
+            c[i] = (e[i] - pe[i]) / g->len;
+    } else {
+        for (int i = 0; i < 3; i++)
+            c[i] = ip->a_L[i] - n[i] * (a->axial_mm / g->len);
+    }
     ip->aw = a->sweep_rad / g->len;
     ip->anchor = 0;
     ip->a_len = g->len;
     ip->a_off = ip->off_mm;
-    lsm_real p[LSM_MAX_AXES], pe[LSM_MAX_AXES], e[3];
+    lsm_real p[LSM_MAX_AXES];
     (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
-    (void)lsm_geom_eval(g, g->len, pe, NULL, NULL);
-    block_end(ip, ip->blk, e);
-    const lsm_real n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
-                           a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
     lsm_real sp, cp;
     lsm_sincos(a->phi0_rad + ip->aw * ip->a_off, &sp, &cp);
     for (int i = 0; i < 3; i++) {
-        const lsm_real corr = (e[i] - pe[i]) / g->len;
+        const lsm_real corr = c[i];
         ip->a_p[i] = p[i] + corr * ip->a_off;
         ip->a_A[i] = a->radius_mm * (cp * a->e1[i] + sp * a->e2[i]);
         ip->a_B[i] = a->radius_mm * (cp * a->e2[i] - sp * a->e1[i]);
@@ -131,6 +141,7 @@ static void activate(lsm_interp *ip)
     const lsm_geom *g = &b->g;
     ip->gkind = g->kind;
     if (g->kind == LSM_GEOM_ARC) {
+        ip->anchor = 0; /* a block entry: its end correction afresh */
         arc_anchor(ip, g);
     } else if (g->kind == LSM_GEOM_CLOTHOID) {
         lsm_clothoid seg;

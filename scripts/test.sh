@@ -45,6 +45,7 @@ count_pytest() {
 
 echo "== pytest"
 export LISSOM_SIM="$PWD/build/bin/lissom-sim"
+export LISSOM_SIM_FLOAT="$PWD/build-float/bin/lissom-sim"   # tests/py/test_float_sim.py
 .venv/bin/python -m pytest -q -p no:cacheprovider tests/py 2>&1 | tee "$log"
 count_pytest "$log" "${PIPESTATUS[0]}"
 

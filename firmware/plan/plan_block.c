@@ -294,8 +294,9 @@ bool lsm_pl_geom_end(const lsm_geom *g, const lsm_real start[LSM_MAX_AXES], cons
     for (int i = 0; i < LSM_MAX_AXES; i++)
         end[i] = start[i];
     (void)lsm_geom_eval(g, g->len, end, NULL, NULL);
-    /* a geometric end within rounding of the programmed one is the programmed one (exact program ends) */
-    lsm_real d2 = R0, sc = R1;
+    /* a geometric end within rounding of the programmed one is the programmed one (exact program ends): an arc's
+     * end carries the rounding of its radius too (double: its centre, R eps; R 1e4 ended 9.1e-13 off) */
+    lsm_real d2 = R0, sc = R1 + (g->kind == LSM_GEOM_ARC ? g->u.arc.radius_mm : R0);
     for (int i = 0; i < 3; i++) {
         d2 += (end[i] - prog_end[i]) * (end[i] - prog_end[i]);
         sc += lsm_fabs(prog_end[i]);

@@ -186,7 +186,7 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
     st = lsm_geom_line_init(&g, from, end);
     if (st != LSM_OK)
         return st;
-    if (g.len <= LEN_EPS * (R1 + lsm_fabs(end[0]) + lsm_fabs(end[1]) + lsm_fabs(end[2])) && !g.rotary_only)
+    if (g.len <= LINE_LEN_EPS * (R1 + lsm_fabs(end[0]) + lsm_fabs(end[1]) + lsm_fabs(end[2])) && !g.rotary_only)
         return LSM_E_ZERO_LENGTH;
     st = lsm_pl_append_line_fit(pl, &g, end, mv);
     return st;

@@ -578,6 +578,39 @@ static void plan_cruise(search *s, lsm_real lo)
     }
 }
 
+/* Lower cruises tried when the best plan ends with a trail cruise below its cruise (trail_levels): each this share
+ * of the way from v1 to the last one, at most TRAIL_LEVELS of them. */
+#define TRAIL_LEVELS 4
+#define TRAIL_LEVEL_RATIO LSM_R(0.75)
+
+/* The highest cruise is not always the fastest piece: where ramp B cannot verify late (it would cross a block whose
+ * budgets vanish near its cap at that speed), it moves early and the piece trails the rest at v1 (a corner run at
+ * 1.4 mm/s instead of 29 mm/s: the float build's crawl_random, seed 6). A few lower cruises, whose ramp B can cross
+ * that block, are tried, and the one with the shortest piece time is kept. */
+static void trail_levels(search *s)
+{
+    const lsm_real dt = s->pl->cfg.cycle_s;
+    plan5 *b = &s->best;
+    const lsm_real D = s->pc.D;
+    if (!s->have || !(b->vc > b->v1) || !(D - (b->xB + b->B.dist) > LEN_EPS * (R1 + D)))
+        return;
+    lsm_real t_best = plan_time(b, dt, D);
+    lsm_real vc = b->vc;
+    const lsm_real v0 = b->v0, v1 = b->v1;
+    for (int k = 0; k < TRAIL_LEVELS; k++) {
+        vc = v1 + (vc - v1) * TRAIL_LEVEL_RATIO;
+        if (!(vc > lsm_max2(v0, v1) * (R1 + STAIR_MIN_STEP)))
+            break;
+        if (!feas5(&s->pc, v0, vc, v1, s->exact, false, &s->p))
+            continue;
+        const lsm_real t = plan_time(&s->p, dt, D);
+        if (t < t_best - STAIR_MIN_GAIN_CYCLES * dt) {
+            t_best = t;
+            *b = s->p;
+        }
+    }
+}
+
 /* The stages of the search for the piece to the candidate node id_end (s->pc and s->w1 set). */
 static void plan_to_node(search *s, uint32_t id_end)
 {
@@ -598,6 +631,7 @@ static void plan_to_node(search *s, uint32_t id_end)
     plan_below_dips(s, id_end, lo);
     plan_certified(s);
     plan_cruise(s, lo);
+    trail_levels(s);
 }
 
 /* One pass over the candidate nodes (planner.h: to the next node; if no verified piece reaches it, to the one

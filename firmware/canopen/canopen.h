@@ -26,8 +26,12 @@
  *         GPIO: drive enable = lsm_canopen_drive_enable(), in position = lsm_canopen_in_position()
  *         while (lsm_canopen_tx_pop(&node, &f)) port sends f;
  *
- * Not reentrant: call every function of one node from one context (or serialise the calls); frames are
- * queued, never sent from inside, so the port decides when and from where they go out.
+ * Contexts. Not reentrant: every function of one node (and of its axes, cia402.h, and path buffer, co_path.h) is
+ * called from one context, the node's, or the calls are serialised; frames are queued, never sent from inside,
+ * so the port decides when and from where they go out. In lissom-node and with the motion layer (motion.h) the
+ * node's context is the control cycle: received frames, SYNC and PDOs, SDO and NMT are all served there, before
+ * the motion of the cycle. Not yet done (issue 13): serving SDO (and the path-block appends it causes) from the
+ * background while SYNC and PDO timing stay in the cycle; that needs a hand-off of the object writes.
  *
  * Reactions to faults and bad input (details and codes in docs/canopen.md):
  *   - malformed frame (wrong DLC for its service, RTR, 29-bit id): ignored, counted (`malformed`), and for
@@ -125,42 +129,42 @@ typedef struct lsm_canopen {
 
 /* A configuration with the documented defaults: node id 1, 1 axis, heartbeat 100 ms, no consumer, no
  * storage (the caller must set tx_storage/tx_cap and path_storage/path_cap). */
-lsm_canopen_config lsm_canopen_default_config(void);
+lsm_canopen_config lsm_canopen_default_config(void); /* any context */
 
 /*
  * Builds the node and boots it: every object at its default, default PDO mapping (docs/canopen.md), the
  * boot-up frame queued, NMT PRE-OPERATIONAL. Errors: LSM_E_NULL (node, cfg, storage), LSM_E_CO_NODE_ID,
  * LSM_E_CO_AXES, LSM_E_ARG (a capacity 0 or > 65535, master_node_id > 127), LSM_E_CO_OD (internal table check
- * failed: a bug).
+ * failed: a bug). The node's context, before its cycle runs.
  */
 lsm_status lsm_canopen_init(lsm_canopen *node, const lsm_canopen_config *cfg, uint32_t now_us);
 
 /*
  * Serves one received frame. Returns LSM_OK (served, or not addressed to this node), LSM_E_CO_FRAME
  * (malformed: ignored; PDO/SYNC length errors also send their EMCY), LSM_E_CO_NMT_STATE (the service is not
- * available in the present NMT state: ignored), LSM_E_NULL.
+ * available in the present NMT state: ignored), LSM_E_NULL. The node's context.
  */
 lsm_status lsm_canopen_rx(lsm_canopen *node, const lsm_can_frame *f, uint32_t now_us);
 
 /* Timers (heartbeat, SDO timeout, event TPDOs), consumer timeouts, axis EMCY events, path/axis coupling,
  * pending NMT reset. Call once per control cycle. Returns LSM_OK, LSM_E_CO_BUS_OFF (done, but the controller
- * is bus-off: nothing was queued) or LSM_E_NULL. */
+ * is bus-off: nothing was queued) or LSM_E_NULL. The node's context (the control cycle). */
 lsm_status lsm_canopen_process(lsm_canopen *node, uint32_t now_us);
 
-/* Takes the next frame to send. False when none. */
+/* Takes the next frame to send. False when none. The node's context. */
 bool lsm_canopen_tx_pop(lsm_canopen *node, lsm_can_frame *out);
 
-/* Port-level controller events (see lsm_can_bus_event). */
+/* Port-level controller events (see lsm_can_bus_event). The node's context. */
 void lsm_canopen_bus_event(lsm_canopen *node, lsm_can_bus_event ev, uint32_t now_us);
 
-/* E-stop input level (true = stop requested); call every cycle, edges are detected here. */
+/* E-stop input level (true = stop requested); call every cycle, edges are detected here. The node's context. */
 void lsm_canopen_estop(lsm_canopen *node, bool active, uint32_t now_us);
 
 /* An application fault on axis k (drive error, limit switch, ...): fault reaction with `code` in 0x603F
- * and its EMCY. Errors: LSM_E_NULL, LSM_E_ARG (k). */
+ * and its EMCY. Errors: LSM_E_NULL, LSM_E_ARG (k). The node's context. */
 lsm_status lsm_canopen_axis_fault(lsm_canopen *node, size_t k, uint16_t code);
 
-/* Accessors. lsm_canopen_axis returns NULL for k >= n_axes. */
+/* Accessors. lsm_canopen_axis returns NULL for k >= n_axes. The node's context. */
 lsm_cia402 *lsm_canopen_axis(lsm_canopen *node, size_t k);
 lsm_co_path *lsm_canopen_path(lsm_canopen *node);
 lsm_co_od *lsm_canopen_od(lsm_canopen *node);

@@ -217,7 +217,7 @@ lsm_status lsm_cia402_init(lsm_cia402 *ax);
  * now_us is the time of the write (not used by the present objects). */
 uint32_t lsm_cia402_od_write(lsm_cia402 *ax, uint16_t index, uint8_t sub, int64_t value, uint32_t now_us);
 
-/* Application side, each cycle. */
+/* Application side, each cycle. The node's context (canopen.h: the control cycle), as every call here. */
 void lsm_cia402_update(lsm_cia402 *ax, const lsm_cia402_feedback *fb, uint32_t now_us);
 lsm_cia402_sp_event lsm_cia402_pp_fetch(lsm_cia402 *ax, lsm_cia402_setpoint *sp);
 bool lsm_cia402_pp_peek_next(const lsm_cia402 *ax, lsm_cia402_setpoint *sp);

@@ -157,7 +157,7 @@ uint32_t lsm_co_path_resync(lsm_co_path *p, uint32_t last_seq);
 /* Node: a fault or stop of the axes holds a running path with a quick stop. */
 void lsm_co_path_hold(lsm_co_path *p, bool quick);
 
-/* Application side. */
+/* Application side. The node's context (canopen.h: the control cycle), as every call here. */
 lsm_co_path_motion lsm_co_path_get_motion(const lsm_co_path *p);
 size_t lsm_co_path_count(const lsm_co_path *p);
 /* i-th queued block, 0 = oldest (look-ahead without consuming). False when i >= count. */

@@ -127,7 +127,7 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
     if (ip->off_mm > b->g.len)
         ip->off_mm = b->g.len;
     if (moved) {
-        lsm_planner_release(ip->pl, ip->blk);
+        lsm_planner_post_release(ip->pl, ip->blk);
         activate(ip);
     } else if (ip->gkind == LSM_GEOM_ARC && ds > R0) {
         if (++ip->anchor >= ARC_ANCHOR_CYCLES) {
@@ -152,7 +152,7 @@ static void place(lsm_interp *ip, uint32_t id, lsm_real off)
 {
     ip->blk = id;
     ip->off_mm = off;
-    lsm_planner_release(ip->pl, id);
+    lsm_planner_post_release(ip->pl, id);
     activate(ip);
     eval_pos(ip);
 }
@@ -190,7 +190,7 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     const lsm_piece *pc = &CUR(ip);
     ip->running = 1;
     ip->serial++;
-    ip->pl->piece_stale = 0; /* a piece planned on the current geometry */
+    lsm_planner_post_stale_ack(ip->pl, ip->prep.stale_seen); /* a piece planned on the geometry of then */
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
     ip->phase = 0;
@@ -389,6 +389,7 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     q->cycle = w->cycle;
     q->serial = ip->serial;
     q->gen = ip->pl->gen;
+    q->stale_seen = lsm_planner_stale_count(ip->pl);
     q->blk = w->blk;
     q->off_mm = w->off;
     q->v_mm_s = w->v;
@@ -436,7 +437,7 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w)
 static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w)
 {
     const lsm_interp_prep *q = piece_for(ip, w);
-    if ((q == NULL || !(NXT(ip).T_s > R0)) && ip->pl->piece_stale) {
+    if ((q == NULL || !(NXT(ip).T_s > R0)) && lsm_planner_piece_stale(ip->pl)) {
         w->mode = LSM_PIECE_NORMAL;
         q = piece_for(ip, w);
     }
@@ -479,7 +480,7 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
         return false;
     if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p)
         return true;
-    if ((p == 8u || p == 16u) && !CUR(ip).hold && ip->pl->piece_stale)
+    if ((p == 8u || p == 16u) && !CUR(ip).hold && lsm_planner_piece_stale(ip->pl))
         return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */
     if (ip->bg)
         return false;
@@ -588,7 +589,7 @@ static void end_piece(lsm_interp *ip)
             const lsm_pblock *b = bk(ip, pl->tail - 1u);
             ip->blk = pl->tail - 1u;
             ip->off_mm = b ? b->g.len : R0;
-            lsm_planner_release(pl, ip->blk);
+            lsm_planner_post_release(pl, ip->blk);
             activate(ip);
             if (CUR(ip).stop) {
                 for (int i = 0; i < LSM_MAX_AXES; i++) /* the programmed end, exactly */
@@ -651,9 +652,9 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         if (!ended) {
             advance_path(ip, ds);
             if (is_ramp_phase(ip->phase))
-                lsm_planner_set_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
+                lsm_planner_post_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             else
-                lsm_planner_set_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
+                lsm_planner_post_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             return;
         }
         end_piece(ip);
@@ -743,7 +744,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
         if (sample_ready && q->cycle == ip->cycles) {
             take(ip, q, dt, true);
         } else if (at_a_zero(ip) && !CUR(ip).hold &&
-                   ((pl->piece_stale && !(sample_ready && q->cycle > ip->cycles)) ||
+                   ((lsm_planner_piece_stale(pl) && !(sample_ready && q->cycle > ip->cycles)) ||
                     (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
             /* (a stale piece waits for a replacement prepared for a sample still ahead in this cruise: planned
              * with the current plan, it is verified, and the rest of the cruise is not what changed) */
@@ -765,7 +766,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             run_cycle(ip, dt);
     }
     if (!ip->running) /* at rest (or stopped for good): the machine stands here */
-        lsm_planner_set_horizon(pl, ip->blk, ip->off_mm, R0, ip->blk, R0);
+        lsm_planner_post_horizon(pl, ip->blk, ip->off_mm, R0, ip->blk, R0);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pos[i] = ip->pos[i];
     return (lsm_interp_state)ip->state;

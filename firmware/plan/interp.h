@@ -47,6 +47,15 @@
  * while it decelerates only joins at speed if the planner verified that it still can from the interpolator's
  * commitment point; else the junction is an exact stop).
  *
+ * Contexts. lsm_interp_step is the control cycle (tick); lsm_interp_prepare, hold, resume and the override are the
+ * background, which owns the planner. The step writes nothing of the planner's: what it used to set there (the
+ * blocks it is done with, its commitment horizon, the acknowledgement of a stale piece) it posts as requests
+ * (planner.h, lsm_planner_req: single writer, sequence counter), which the background applies at the start of
+ * its next planner call. Not finished (issue 13): the step still reads the planner's tail, gen and blocks and the
+ * prepared slot, and the background reads the step's cursor and pieces, without a hand-off, and the step plans a
+ * piece itself when none is prepared; so today both must run in one context, or the background must not be
+ * preempted by the step (a synchronous loop: prepare, then step).
+ *
  * Units: mm, s, rad.
  */
 #ifndef LSM_INTERP_H
@@ -86,6 +95,7 @@ typedef struct lsm_interp_prep {
     uint8_t failed;       /* no piece fits at this switch point for this generation (do not try again) */
     uint8_t mode;         /* lsm_piece_mode it was planned with */
     uint8_t reserved[3];
+    uint32_t stale_seen;  /* the planner's invalidation count when it was planned (lsm_planner_stale_count) */
 } lsm_interp_prep;
 
 typedef struct lsm_interp {
@@ -132,25 +142,27 @@ typedef struct lsm_interp {
     lsm_interp_prep prep;        /* the slot of lsm_interp_prepare */
 } lsm_interp;
 
-/* Start at rest at the planner's start position. Errors: LSM_E_NULL. */
+/* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */
 lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl);
 
-/* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. */
+/* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. Control cycle. */
 lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
 
 /* Background work between cycles: plans the next piece the interpolator will need (see above). Returns LSM_OK (a
  * piece is ready, or nothing is needed), LSM_E_INFEASIBLE (none fits at the next switch point: the current plan
- * stays valid and is followed), LSM_E_NULL. At most one piece plan per call. */
+ * stays valid and is followed), LSM_E_NULL. At most one piece plan per call. Background. */
 lsm_status lsm_interp_prepare(lsm_interp *ip);
 
-/* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first). */
+/* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first).
+ * Background. */
 void lsm_interp_hold(lsm_interp *ip);
 void lsm_interp_resume(lsm_interp *ip);
 
-/* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE. */
+/* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
+ * Background. */
 lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real factor);
 
-/* Current feed along the path (mm/s) and state. */
+/* Current feed along the path (mm/s) and state. Control cycle (or after it, in a synchronous loop). */
 lsm_real lsm_interp_feed(const lsm_interp *ip);
 lsm_interp_state lsm_interp_state_of(const lsm_interp *ip);
 

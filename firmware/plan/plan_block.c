@@ -366,8 +366,8 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     lsm_pl_backward_pass(pl);
     /* a corner that trimmed the block the interpolator's current piece ends in (it runs to the end of the buffer):
      * a verified piece from its commitment point must exist (it will be taken there) */
-    const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) || pl->piece_stale ||
-                        !lsm_pl_commitment_kept(pl);
+    const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) ||
+                        lsm_planner_piece_stale(pl) || !lsm_pl_commitment_kept(pl);
     /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
     if (has_prev && !(flags & LSM_PB_STOP) && stales && !lsm_pl_horizon_feasible(pl, true)) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
@@ -384,7 +384,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         pl->full_pass = 1;
         lsm_pl_backward_pass(pl);
     } else if (stales) {
-        pl->piece_stale = 1;
+        lsm_pl_mark_stale(pl);
     }
     return LSM_OK;
 }

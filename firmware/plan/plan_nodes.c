@@ -315,14 +315,17 @@ void lsm_pl_backward_pass(lsm_planner *pl)
 
 void lsm_planner_update(lsm_planner *pl)
 {
-    if (pl)
-        lsm_pl_backward_pass(pl);
+    if (pl == NULL)
+        return;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
+    lsm_pl_backward_pass(pl);
 }
 
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
 {
     if (pl == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     if (f != f)
         return LSM_E_NAN;
     if (!(f >= R0 && f <= LSM_R(2.0)))
@@ -366,7 +369,7 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
             need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
         }
         if (!lsm_pl_commitment_kept(pl))
-            pl->piece_stale = 1; /* (the loop verified a piece from the horizon) */
+            lsm_pl_mark_stale(pl); /* (the loop verified a piece from the horizon) */
         return LSM_OK;
     }
     pl->full_pass = 1;

@@ -379,6 +379,7 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
 {
     if (pl == NULL || out == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     if (id_lt(id0, pl->head) || !id_lt(id0, pl->tail))
         return LSM_E_EMPTY;
     const lsm_real dt = pl->cfg.cycle_s;

@@ -98,19 +98,29 @@ lsm_status lsm_planner_init(lsm_planner *pl, const lsm_planner_config *cfg, lsm_
     return LSM_OK;
 }
 
+/* The first block the tick still needs: head, advanced by the release it posted and the background has not
+ * applied yet (as lsm_planner_release would: at most to the tail). */
+static uint32_t live_head(const lsm_planner *pl)
+{
+    const uint32_t r = lsm_atomic_get_acquire((lsm_atomic_u32 *)&pl->req.release_blk);
+    if (!id_lt(pl->head, r))
+        return pl->head;
+    return id_lt(r, pl->tail) ? r : pl->tail;
+}
+
 uint32_t lsm_planner_free(const lsm_planner *pl)
 {
-    return pl ? pl->cap - (pl->tail - pl->head) : 0;
+    return pl ? pl->cap - (pl->tail - live_head(pl)) : 0;
 }
 
 uint32_t lsm_planner_count(const lsm_planner *pl)
 {
-    return pl ? pl->tail - pl->head : 0;
+    return pl ? pl->tail - live_head(pl) : 0;
 }
 
 const lsm_pblock *lsm_planner_block(const lsm_planner *pl, uint32_t id)
 {
-    if (pl == NULL || id_lt(id, pl->head) || !id_lt(id, pl->tail))
+    if (pl == NULL || id_lt(id, live_head(pl)) || !id_lt(id, pl->tail))
         return NULL;
     return blk(pl, id);
 }
@@ -158,6 +168,7 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
 {
     if (end == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     lsm_status st = check_append(pl, mv);
     if (st != LSM_OK)
         return st;
@@ -186,6 +197,7 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
 {
     if (end == NULL || centre == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     lsm_status st = check_append(pl, mv);
     if (st != LSM_OK)
         return st;
@@ -232,6 +244,7 @@ lsm_status lsm_planner_flush(lsm_planner *pl)
 {
     if (pl == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     return lsm_pl_emit_run(pl, pl->fit_n);
 }
 
@@ -267,6 +280,7 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
 {
     if (pl == NULL)
         return LSM_E_NULL;
+    lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     if (pl->finished)
         return LSM_OK;
     lsm_status st = lsm_pl_emit_run_exact(pl);
@@ -327,4 +341,97 @@ void lsm_planner_release(lsm_planner *pl, uint32_t id)
         pl->head++;
         pl->head_slot = (pl->head_slot + 1u) % pl->cap;
     }
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* the tick's requests (planner.h, lsm_planner_req; lsm_atomic.h)                                               */
+
+void lsm_planner_post_release(lsm_planner *pl, uint32_t id)
+{
+    if (pl == NULL || !id_lt(lsm_atomic_get(&pl->req.release_blk), id))
+        return; /* releases only grow (an earlier id frees nothing more) */
+    lsm_seq_write_begin(&pl->req.seq);
+    lsm_seq_put(&pl->req.release_blk, id);
+    lsm_seq_write_end(&pl->req.seq);
+}
+
+void lsm_planner_post_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+                              lsm_real end_v_mm_s)
+{
+    if (pl == NULL)
+        return;
+    lsm_planner_req *r = &pl->req;
+    const lsm_real ev = end_v_mm_s > R0 ? end_v_mm_s : R0;
+    /* the tick's own previous post (or the initial commitment) is what lsm_planner_set_horizon compares with */
+    const bool changed = end_blk != lsm_atomic_get(&r->hz_end) || ev != lsm_atomic_get(&r->hz_end_v);
+    lsm_seq_write_begin(&r->seq);
+    lsm_seq_put(&r->hz_blk, id);
+    lsm_seq_put(&r->hz_off, off_mm);
+    lsm_seq_put(&r->hz_v, v_mm_s > R0 ? v_mm_s : R0);
+    lsm_seq_put(&r->hz_end, end_blk);
+    lsm_seq_put(&r->hz_end_v, ev);
+    if (changed)
+        lsm_seq_put(&r->end_changes, lsm_atomic_get(&r->end_changes) + 1u);
+    lsm_seq_put(&r->hz_posted, 1u);
+    lsm_seq_write_end(&r->seq);
+}
+
+void lsm_planner_post_stale_ack(lsm_planner *pl, uint32_t stale_seen)
+{
+    if (pl == NULL)
+        return;
+    lsm_seq_write_begin(&pl->req.seq);
+    lsm_seq_put(&pl->req.stale_ack, stale_seen);
+    lsm_seq_write_end(&pl->req.seq);
+}
+
+/* One consistent copy of the requests (sequence lock, reader side). */
+typedef struct req_copy {
+    uint32_t seq, release_blk, hz_posted, hz_blk, hz_end, end_changes;
+    lsm_real hz_off, hz_v, hz_end_v;
+} req_copy;
+
+static void read_requests(lsm_planner_req *r, req_copy *c)
+{
+    uint32_t s;
+    do {
+        s = lsm_seq_read_begin(&r->seq);
+        c->release_blk = lsm_seq_get(&r->release_blk);
+        c->hz_posted = lsm_seq_get(&r->hz_posted);
+        c->hz_blk = lsm_seq_get(&r->hz_blk);
+        c->hz_off = lsm_seq_get(&r->hz_off);
+        c->hz_v = lsm_seq_get(&r->hz_v);
+        c->hz_end = lsm_seq_get(&r->hz_end);
+        c->hz_end_v = lsm_seq_get(&r->hz_end_v);
+        c->end_changes = lsm_seq_get(&r->end_changes);
+    } while (lsm_seq_read_retry(&r->seq, s));
+    c->seq = s;
+}
+
+void lsm_planner_apply_requests(lsm_planner *pl)
+{
+    if (pl == NULL)
+        return;
+    req_copy c;
+    read_requests(&pl->req, &c);
+    if (c.seq == pl->req_seq_applied)
+        return;
+    pl->req_seq_applied = c.seq;
+    lsm_planner_release(pl, c.release_blk);
+    if (c.hz_posted) {
+        pl->horizon_blk = c.hz_blk;
+        pl->horizon_off = c.hz_off;
+        pl->horizon_v = c.hz_v;
+        pl->horizon_end = c.hz_end;
+        pl->horizon_end_v = c.hz_end_v;
+        if (c.end_changes != pl->end_changes_applied) /* as lsm_planner_set_horizon: the end moved */
+            pl->commit_dirty = 1;
+        pl->end_changes_applied = c.end_changes;
+    }
+}
+
+void lsm_pl_mark_stale(lsm_planner *pl)
+{
+    /* counted even when already stale: a piece planned before this change must not clear it when taken */
+    lsm_atomic_put_release(&pl->stale_set, lsm_atomic_get(&pl->stale_set) + 1u);
 }

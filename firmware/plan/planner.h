@@ -63,7 +63,7 @@
  *    An append changes nothing before that point. If it invalidates the current piece (a corner trims the block
  *    the piece ends in, or the piece's end is no longer a speed from which the machine can go on: valleys near the
  *    end of the buffer move when blocks are appended), a verified piece from the horizon must exist, and the
- *    interpolator must take a new piece there (piece_stale); if none exists (the new block, or the trim of its
+ *    interpolator must take a new piece there (lsm_planner_piece_stale); if none exists (the new block, or the trim of its
  *    corner, took room the machine needs to slow down), the junction becomes an exact stop instead, which restores
  *    the previous plan exactly (stats.horizon_stops; the node detection never looks across an exact stop). A lower
  *    override applies from a block far enough out that the same holds (at worst, to blocks appended later only).
@@ -71,6 +71,12 @@
  *    whole-cycle ramps change shape with the speed), so a W says nothing of the speeds below it: a piece arrives
  *    at a node below its W only at a speed that passed W's own test, the forward search always tries, last, the
  *    piece the node's certificate verified, and the backward pass keeps an old W only if it still passes its test.
+ *  - Contexts. The planner belongs to the background (appends, lsm_interp_prepare): every call below says which
+ *    context may call it. The control cycle (lsm_interp_step) reads the blocks of its piece and writes nothing
+ *    of the planner's: it posts requests (lsm_planner_req: the blocks it is done with, its commitment horizon,
+ *    the piece invalidation it has seen) under a sequence counter, and the background applies them at the start
+ *    of its next call. Not yet done (issue 13): the cycle still reads head, tail, gen and the blocks without a
+ *    hand-off (the background appends and trims them), so the two may not yet preempt each other (interp.h).
  *  - The control cycle does not plan: pieces are planned ahead by lsm_interp_prepare (interp.h).
  *    Hence a buffer underrun is a clean, verified stop on the path, and the interpolator starts again by itself
  *    when blocks are appended behind it.
@@ -98,6 +104,7 @@
 
 #include "arcfit.h"
 #include "geom.h"
+#include "lsm_atomic.h"
 #include "scurve.h"
 
 /* Smallest block storage accepted (a corner needs three slots). */
@@ -210,6 +217,24 @@ typedef struct lsm_planner_stats {
     uint32_t bp_nodes;        /* node evaluations in backward passes */
 } lsm_planner_stats;
 
+/* The requests of the control cycle (interp.c's lsm_interp_step, the tick) to the planner, which belongs to the
+ * background: the tick is done with the blocks before release_blk (their slots may be reused), its commitment
+ * horizon (lsm_planner_set_horizon's arguments), and the piece it runs was planned when stale_set had the value
+ * stale_ack. Written only by the tick (lsm_planner_post_*), published with the sequence counter `seq`
+ * (lsm_atomic.h); the background applies them (lsm_planner_apply_requests) at the start of every background call
+ * of this header, and lsm_planner_free / count / block count the posted release at once. */
+typedef struct lsm_planner_req {
+    lsm_atomic_u32 seq;           /* sequence counter: odd while the tick writes */
+    lsm_atomic_u32 release_blk;   /* the tick is done with the blocks before this id (only grows) */
+    lsm_atomic_u32 hz_posted;     /* a horizon was posted */
+    lsm_atomic_u32 hz_blk;        /* lsm_planner_set_horizon's blk, off_mm, v_mm_s, end_blk, end_v_mm_s */
+    lsm_atomic_real hz_off, hz_v;
+    lsm_atomic_u32 hz_end;
+    lsm_atomic_real hz_end_v;
+    lsm_atomic_u32 end_changes;   /* posts whose end (end_blk, end_v) differed from the one before */
+    lsm_atomic_u32 stale_ack;     /* the stale_set value the tick's present piece was planned on */
+} lsm_planner_req;
+
 typedef struct lsm_planner {
     lsm_planner_config cfg;
     lsm_pblock *blk;
@@ -230,11 +255,15 @@ typedef struct lsm_planner {
     lsm_real horizon_v;
     uint32_t horizon_end;       /* its current piece ends at the start of this block (the tail: the buffer's end) */
     lsm_real horizon_end_v;     /* at this speed (a = 0): the W of that node must stay at least this */
-    uint8_t piece_stale;        /* the current piece was invalidated (a corner trimmed the block it ends in, or its
-                                   end speed no longer goes on): a new piece must start at the horizon (verified to
-                                   exist there); cleared by the interpolator when it takes one */
+    lsm_atomic_u32 stale_set;   /* counts invalidations of the interpolator's current piece (a corner trimmed the
+                                   block it ends in, or its end speed no longer goes on): while it differs from
+                                   req.stale_ack the piece is stale (lsm_planner_piece_stale) and a new piece must
+                                   start at the horizon (verified to exist there). Background-written. */
     uint8_t commit_dirty;       /* the commitment changed since it was last verified in full */
-    uint8_t reserved3[2];
+    uint8_t reserved3[3];
+    uint32_t req_seq_applied;   /* req.seq when the requests were last applied */
+    uint32_t end_changes_applied; /* req.end_changes then */
+    lsm_planner_req req;        /* the tick's requests (above) */
     uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */
     uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
     /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */
@@ -250,7 +279,8 @@ typedef struct lsm_planner {
     lsm_planner_stats stats;
 } lsm_planner;
 
-/* Defaults: 1 ms cycle, X Y Z at 250 mm/s, 3000 mm/s², 60000 mm/s³, 1.2e7 mm/s⁴, and the macros above. */
+/* Defaults: 1 ms cycle, X Y Z at 250 mm/s, 3000 mm/s², 60000 mm/s³, 1.2e7 mm/s⁴, and the macros above. Any
+ * context. */
 void lsm_planner_default_config(lsm_planner_config *cfg);
 
 /*
@@ -258,6 +288,7 @@ void lsm_planner_default_config(lsm_planner_config *cfg);
  * Errors: LSM_E_NULL, LSM_E_CYCLE, LSM_E_LIMIT (an existing axis's limit <= 0, or a path limit < 0),
  * LSM_E_NAN, LSM_E_INF, LSM_E_ARG (axis_mask 0 or above 0x3F, cap_margin / node_hyst / node_drop / trim_share
  * outside their ranges), LSM_E_PL_CAPACITY (capacity < LSM_PLANNER_MIN_BLOCKS).
+ * Background, while no interpolator cycle runs on this planner (re-initialise its interpolator after it).
  */
 lsm_status lsm_planner_init(lsm_planner *pl, const lsm_planner_config *cfg, lsm_pblock *storage, uint32_t capacity,
                             const lsm_real start[LSM_MAX_AXES]);
@@ -267,39 +298,41 @@ lsm_status lsm_planner_init(lsm_planner *pl, const lsm_planner_config *cfg, lsm_
  * Errors (nothing is changed): LSM_E_NULL, LSM_E_NAN, LSM_E_INF (end, feed or tolerance not finite),
  * LSM_E_NEG_FEED (feed <= 0 and not rapid), LSM_E_TOLERANCE (tol < 0), LSM_E_PL_AXIS (an axis outside the mask
  * moves), LSM_E_ZERO_LENGTH, LSM_E_RANGE, LSM_E_FULL (fewer than 3 free slots), LSM_E_PL_FINISHED.
+ * Background.
  */
 lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES], const lsm_planner_move *mv);
 
 /*
  * Append a circular or helical arc from the end of the last block to `end` (X Y Z) around `centre` in a G17/18/19
  * plane, dir = +1 (G3) or -1 (G2), plus `turns` full turns (geom.h). A B C stay where they are.
- * Errors: as lsm_planner_append_line, plus LSM_E_ARG and LSM_E_ARC_GEOMETRY (geom.h).
+ * Errors: as lsm_planner_append_line, plus LSM_E_ARG and LSM_E_ARC_GEOMETRY (geom.h). Background.
  */
 lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3], lsm_geom_plane plane,
                                   int dir, uint32_t turns, const lsm_planner_move *mv);
 
 /* End of program: the last block ends with an exact stop on its programmed end point (pending points are
  * emitted first). Errors: LSM_E_NULL, LSM_E_FULL (room for the pending points is missing: run the interpolator
- * and call again). */
+ * and call again). Background. */
 lsm_status lsm_planner_finish(lsm_planner *pl);
 
 /* Emits the G1 points held for fitting (a caller that pauses its stream calls this so that the machine does not
- * stop short of them). Errors: LSM_E_NULL, LSM_E_FULL. */
+ * stop short of them). Errors: LSM_E_NULL, LSM_E_FULL. Background. */
 lsm_status lsm_planner_flush(lsm_planner *pl);
 
-/* Free block slots (an append needs up to 3). */
+/* Free block slots (an append needs up to 3), counting the release the tick posted. Background. */
 uint32_t lsm_planner_free(const lsm_planner *pl);
-/* Blocks held. */
+/* Blocks held, counting the release the tick posted. Background. */
 uint32_t lsm_planner_count(const lsm_planner *pl);
-/* Block by id (NULL outside [head, tail)). */
+/* Block by id (NULL outside [head, tail), head counting the posted release). Background; the tick reads the
+ * blocks of its piece (interp.c), which the background does not change before the horizon. */
 const lsm_pblock *lsm_planner_block(const lsm_planner *pl, uint32_t id);
-/* Speed cap of a block with the current override (mm/s). */
+/* Speed cap of a block with the current override (mm/s). Background. */
 lsm_real lsm_planner_block_cap(const lsm_planner *pl, uint32_t id);
 
 /*
  * Feed override factor 0 .. 2. Decreases take effect beyond the distance the machine needs to slow down from
  * v_now_mm_s (at block cur_blk); increases at once. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
- * (The interpolator calls this; 0 is handled there as a feed hold.)
+ * (The interpolator calls this; 0 is handled there as a feed hold.) Background.
  */
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real factor, uint32_t cur_blk, lsm_real v_now_mm_s);
 
@@ -315,7 +348,8 @@ typedef enum lsm_piece_mode {
  * Plan the piece that starts at (blk, off_mm) with speed v0_mm_s (a = 0 there). Errors: LSM_E_NULL,
  * LSM_E_EMPTY (nothing to move: at the end of the buffer), LSM_E_INFEASIBLE (HOLD: no stop fits yet; REPLAN: no
  * verified piece found; follow the current plan and retry), LSM_E_INTERNAL (NORMAL: no verified plan; a fallback
- * piece that stops is returned and counted in stats.plan_fallbacks).
+ * piece that stops is returned and counted in stats.plan_fallbacks). Background (lsm_interp_prepare); the
+ * interpolator's cycle calls it only in a synchronous loop (interp.h, tick_plans).
  */
 lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
                                   lsm_piece_mode mode, lsm_piece *out);
@@ -325,14 +359,41 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm
  * at speed end_v_mm_s. The planner modifies nothing before that point. An append that invalidates the current
  * piece (a corner that trims the block it ends in, or a W of its end node that falls below end_v_mm_s) is only kept
  * if a verified piece from (blk, off_mm) at v_mm_s exists (else the junction becomes an exact stop, which restores
- * the previous plan), and then sets piece_stale: the interpolator must take a new piece there. */
+ * the previous plan), and then marks the piece stale (lsm_planner_piece_stale): the interpolator must take a new
+ * piece there. Background; the interpolator posts it from the cycle instead (lsm_planner_post_horizon). */
 void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
                              lsm_real end_v_mm_s);
 
-/* Blocks before id `blk` are no longer needed (their slots are freed). */
+/* Blocks before id `blk` are no longer needed (their slots are freed). Background (the tick posts it:
+ * lsm_planner_post_release). */
 void lsm_planner_release(lsm_planner *pl, uint32_t blk);
 
-/* Runs the backward pass now (append runs it too; exposed for benchmarks). */
+/* Runs the backward pass now (append runs it too; exposed for benchmarks). Background. */
 void lsm_planner_update(lsm_planner *pl);
+
+/* ---- the tick's requests (lsm_planner_req) ---- */
+
+/* Control cycle: the tick is done with the blocks before `blk` (only a later id than posted before counts). */
+void lsm_planner_post_release(lsm_planner *pl, uint32_t blk);
+/* Control cycle: the commitment horizon, as lsm_planner_set_horizon. */
+void lsm_planner_post_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+                              lsm_real end_v_mm_s);
+/* Control cycle: the tick runs a piece planned when lsm_planner_stale_count was `stale_seen`. */
+void lsm_planner_post_stale_ack(lsm_planner *pl, uint32_t stale_seen);
+/* Background: applies the posted requests (release, horizon). Every background call of this header does it at
+ * its start; a caller may call it at any time in the background. */
+void lsm_planner_apply_requests(lsm_planner *pl);
+
+/* The count of piece invalidations (stale_set). Any context (acquire load). */
+static inline uint32_t lsm_planner_stale_count(const lsm_planner *pl)
+{
+    return lsm_atomic_get_acquire((lsm_atomic_u32 *)&pl->stale_set);
+}
+
+/* True while the interpolator's current piece is stale (invalidated after it was planned). Any context. */
+static inline bool lsm_planner_piece_stale(const lsm_planner *pl)
+{
+    return lsm_planner_stale_count(pl) != lsm_atomic_get((lsm_atomic_u32 *)&pl->req.stale_ack);
+}
 
 #endif /* LSM_PLANNER_H */

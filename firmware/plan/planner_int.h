@@ -163,6 +163,8 @@ lsm_real lsm_pl_cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a
 bool lsm_pl_w_test(pctx *pc, lsm_real v, lsm_real w1, bool exact, ramp *r, lsm_real *xs);
 /* Can a piece that arrives at node id (a = 0) at speed v go on? */
 bool lsm_pl_arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v);
+/* Marks the interpolator's current piece stale (planner.h, stale_set). Background. */
+void lsm_pl_mark_stale(lsm_planner *pl);
 void lsm_pl_backward_pass(lsm_planner *pl);
 
 /* The midpoint of a bisection over [lo, hi], or the first time the probe when it lies inside the bracket (the

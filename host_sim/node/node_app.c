@@ -4,8 +4,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#define PI_D 3.14159265358979323846
-
 void node_app_default_machine(sim_machine *m, int n_axes)
 {
     static const char names[] = "XYZUVW";
@@ -50,16 +48,17 @@ lsm_status node_app_init(node_app *app, const node_app_config *cfg, uint32_t now
         return LSM_E_ARG;
     app->cfg.machine = NULL;
     app->cycle_s = (double)cfg->cycle_us * 1e-6;
+    lsm_motion_config mc;
+    memset(&mc, 0, sizeof mc);
     for (unsigned k = 0; k < cfg->n_axes; k++) {
         const sim_machine_axis *a = &app->machine.axes[k];
-        app->lim[k].v_max = a->v_max_u_s;
-        app->lim[k].a_max = a->a_max_u_s2;
-        app->lim[k].j_max = a->j_max_u_s3;
-        app->lim[k].snap_max = a->snap_max_u_s4;
+        mc.lim[k].v_max_mm_s = a->v_max_u_s;
+        mc.lim[k].a_max_mm_s2 = a->a_max_u_s2;
+        mc.lim[k].j_max_mm_s3 = a->j_max_u_s3;
+        mc.lim[k].snap_max_mm_s4 = a->snap_max_u_s4;
         lsm_status st = sim_drive_init(&app->drv[k], &a->drive, app->cycle_s, 0.0);
         if (st != LSM_OK)
             return st;
-        node_prof_init(&app->ax[k].prof, app->cycle_s, 0.0);
     }
     lsm_canopen_config cc = lsm_canopen_default_config();
     cc.node_id = cfg->node_id;
@@ -75,16 +74,22 @@ lsm_status node_app_init(node_app *app, const node_app_config *cfg, uint32_t now
     lsm_status st = lsm_canopen_init(&app->co, &cc, now_us);
     if (st != LSM_OK)
         return st;
-    for (unsigned k = 0; k < cfg->n_axes; k++)
-        app->ax[k].mode = lsm_canopen_axis(&app->co, k)->mode_display;
-    double zero[LSM_MAX_AXES] = {0};
-    node_path_init(&app->path, cfg->n_axes, app->cycle_s, app->lim, zero);
     if (cfg->path_exec != NODE_APP_PATH_EXACT && cfg->path_exec != NODE_APP_PATH_PLANNER)
         return LSM_E_ARG;
     uint32_t la_cap = cfg->lookahead_blocks != 0u ? cfg->lookahead_blocks
                       : app->machine.lookahead_blocks > 0 ? (uint32_t)app->machine.lookahead_blocks
                                                            : 64u;
-    return node_la_init(&app->la, cfg->n_axes, app->cycle_s, app->lim, zero, la_cap);
+    la_cap = la_cap < LSM_PLANNER_MIN_BLOCKS ? LSM_PLANNER_MIN_BLOCKS
+             : la_cap > NODE_APP_LOOKAHEAD_MAX ? NODE_APP_LOOKAHEAD_MAX
+                                               : la_cap;
+    mc.n_axes = cfg->n_axes;
+    mc.cycle_s = app->cycle_s;
+    mc.path_exec = cfg->path_exec;
+    mc.feed.blocks = app->la_blocks;
+    mc.feed.capacity = la_cap;
+    mc.feed.saved = app->la_saved;
+    mc.feed.saved_cap = NODE_APP_LOOKAHEAD_MAX + 1u;
+    return lsm_motion_init(&app->mo, &mc, &app->co);
 }
 
 lsm_status node_app_rx(node_app *app, const lsm_can_frame *f, uint32_t now_us)
@@ -105,196 +110,24 @@ bool node_app_tx_pop(node_app *app, lsm_can_frame *f)
     return lsm_canopen_tx_pop(&app->co, f);
 }
 
-static int32_t to_counts(double x_mm, double cpm)
-{
-    double c = llround(x_mm * cpm);
-    if (c > 2147483647.0)
-        return INT32_MAX;
-    if (c < -2147483648.0)
-        return INT32_MIN;
-    return (int32_t)c;
-}
-
-/* Stop limits for a stop request of this kind (see node_app.h), in mm units. */
-static node_stop_limits stop_limits(const node_app *app, unsigned k, const lsm_cia402 *ax, uint8_t kind)
-{
-    const node_axis_limits *l = &app->lim[k];
-    const double cpm = (double)ax->counts_per_mm;
-    node_stop_limits s;
-    if (kind == LSM_CIA402_STOP_EMERGENCY) {
-        s.decel = l->a_max;
-        s.jerk = l->j_max;
-        s.snap = l->snap_max;
-        return s;
-    }
-    const double d = kind == LSM_CIA402_STOP_QUICK ? (double)ax->quick_stop_decel : (double)ax->profile_decel;
-    s.decel = fmin(d / cpm, l->a_max);
-    s.jerk = fmin((double)ax->profile_jerk / cpm, l->j_max);
-    s.snap = fmin((double)ax->profile_snap / cpm, l->snap_max);
-    if (ax->profile_type == 0)
-        s.snap = 1.0001 * PI_D * s.jerk / (2 * app->cycle_s);
-    return s;
-}
-
-static node_prof_limits pp_limits(const node_app *app, unsigned k, const lsm_cia402_setpoint *sp, double cpm)
-{
-    const node_axis_limits *l = &app->lim[k];
-    node_prof_limits p;
-    p.v_max = fmin((double)sp->velocity / cpm, l->v_max);
-    p.a_max = fmin((double)(sp->accel < sp->decel ? sp->accel : sp->decel) / cpm, l->a_max);
-    p.j_max = fmin((double)sp->jerk / cpm, l->j_max);
-    p.snap_max = fmin((double)sp->snap / cpm, l->snap_max);
-    p.profile_type = sp->profile_type == 0 ? 0 : 1;
-    return p;
-}
-
-static uint32_t ip_cycles(const node_app *app, const lsm_cia402 *ax)
-{
-    double period = (double)ax->ip_period_value * pow(10.0, (double)ax->ip_period_index);
-    double n = floor(period / app->cycle_s + 0.5);
-    if (!(n >= 1))
-        n = 1;
-    if (n > 100000)
-        n = 100000;
-    return (uint32_t)n;
-}
-
-static void axis_step(node_app *app, unsigned k)
-{
-    lsm_cia402 *ax = lsm_canopen_axis(&app->co, k);
-    node_axis *a = &app->ax[k];
-    const double cpm = (double)ax->counts_per_mm;
-    if (ax->mode_display != a->mode) { /* the display changes only at rest */
-        a->mode = ax->mode_display;
-        a->pp_running = false;
-        a->csp_active = false;
-    }
-    if (a->mode == LSM_CIA402_MODE_PATH)
-        return;
-    lsm_cia402_stop_req req;
-    const lsm_cia402_stop kind = lsm_cia402_stop_request(ax, &req);
-    if (kind != LSM_CIA402_STOP_NONE) {
-        const node_stop_limits sl = stop_limits(app, k, ax, (uint8_t)kind);
-        if (a->csp_active) {
-            const double n_s = (double)a->csp_n * app->cycle_s;
-            double acc = (a->csp_v - a->csp_v_prev) / n_s;
-            acc = fmax(-sl.decel, fmin(sl.decel, acc));
-            a->prof.k.v_mm_s = a->csp_v;
-            a->prof.k.a_mm_s2 = acc;
-            a->csp_active = false;
-        }
-        (void)node_prof_stop(&a->prof, &sl, (uint8_t)kind);
-        a->pp_running = false;
-    } else if (a->mode == LSM_CIA402_MODE_PP) {
-        lsm_cia402_setpoint sp;
-        if (lsm_cia402_pp_fetch(ax, &sp) != LSM_CIA402_SP_NONE) {
-            const node_prof_limits pl = pp_limits(app, k, &sp, cpm);
-            if (node_prof_move(&a->prof, (double)sp.target / cpm, &pl) == LSM_OK) {
-                a->pp_running = true;
-            } else {
-                a->plan_errors++;
-                (void)lsm_canopen_axis_fault(&app->co, k, LSM_CO_EMCY_SOFTWARE);
-            }
-        }
-    } else if (a->mode == LSM_CIA402_MODE_CSP) {
-        int32_t t;
-        if (lsm_cia402_csp_fetch(ax, &t)) {
-            a->csp_n = ip_cycles(app, ax);
-            a->csp_i = 0;
-            a->csp_from = a->prof.k.s_mm;
-            a->csp_to = (double)t / cpm;
-            a->csp_v_prev = a->csp_active ? a->csp_v : 0.0;
-            a->csp_v = (a->csp_to - a->csp_from) / ((double)a->csp_n * app->cycle_s);
-            a->csp_active = true;
-        }
-    }
-    if (a->prof.mode != NODE_PROF_IDLE) {
-        (void)node_prof_step(&a->prof);
-    } else if (a->csp_active) {
-        if (a->csp_i < a->csp_n) {
-            a->csp_i++;
-            a->prof.k.s_mm = a->csp_i == a->csp_n
-                                 ? a->csp_to
-                                 : a->csp_from + (a->csp_to - a->csp_from) * (double)a->csp_i / (double)a->csp_n;
-            a->prof.k.v_mm_s = a->csp_v;
-        } else { /* the period ended without a new set-point: the demand holds */
-            a->csp_active = false;
-            a->csp_v = 0;
-            a->prof.k.v_mm_s = 0;
-        }
-        a->prof.k.a_mm_s2 = a->prof.k.j_mm_s3 = 0;
-    } else {
-        a->prof.k.v_mm_s = a->prof.k.a_mm_s2 = a->prof.k.j_mm_s3 = 0;
-    }
-}
-
-static bool axis_at_rest(const node_app *app, unsigned k)
-{
-    const node_axis *a = &app->ax[k];
-    if (a->mode == LSM_CIA402_MODE_PATH)
-        return !app->path_moving;
-    return node_prof_at_rest(&a->prof) && !a->csp_active && a->prof.k.v_mm_s == 0;
-}
-
 void node_app_cycle(node_app *app, bool estop_active, uint32_t now_us)
 {
     const unsigned n = app->cfg.n_axes;
     app->estop = estop_active;
     lsm_canopen_estop(&app->co, estop_active, now_us);
     (void)lsm_canopen_process(&app->co, now_us);
-
-    double cpm[LSM_MAX_AXES], pos[LSM_MAX_AXES];
+    lsm_motion_cycle(&app->mo, &app->co);
     for (unsigned k = 0; k < n; k++) {
-        axis_step(app, k);
-        cpm[k] = (double)lsm_canopen_axis(&app->co, k)->counts_per_mm;
-        pos[k] = app->ax[k].prof.k.s_mm;
-    }
-    lsm_co_path *cp = lsm_canopen_path(&app->co);
-    lsm_co_path_report rep;
-    if (app->cfg.path_exec == NODE_APP_PATH_EXACT) {
-        node_path_sync(&app->path, pos);
-        node_path_step(&app->path, cp, cpm, &rep);
-        memcpy(app->path_pos, app->path.pos, sizeof app->path_pos);
-        memcpy(app->path_vel, app->path.vel, sizeof app->path_vel);
-        app->path_moving = node_path_moving(&app->path);
-    } else {
-        node_la_sync(&app->la, pos);
-        node_la_step(&app->la, cp, cpm, &rep);
-        memcpy(app->path_pos, app->la.pos, sizeof app->path_pos);
-        memcpy(app->path_vel, app->la.vel, sizeof app->path_vel);
-        app->path_moving = node_la_moving(&app->la);
-    }
-    for (unsigned k = 0; k < n; k++) {
-        node_axis *a = &app->ax[k];
-        if (a->mode == LSM_CIA402_MODE_PATH) {
-            a->prof.k.s_mm = app->path_pos[k];
-            a->prof.k.v_mm_s = app->path_vel[k];
-            a->prof.k.a_mm_s2 = a->prof.k.j_mm_s3 = 0;
-        }
-    }
-    lsm_co_path_update(cp, &rep);
-
-    for (unsigned k = 0; k < n; k++) {
-        node_axis *a = &app->ax[k];
-        lsm_cia402 *ax = lsm_canopen_axis(&app->co, k);
-        double actual = a->prof.k.s_mm;
-        if (sim_drive_step(&app->drv[k], a->prof.k.s_mm, a->prof.k.v_mm_s, &actual) == LSM_OK) {
+        const lsm_kin *d = lsm_motion_demand(&app->mo, k);
+        double actual = d->s_mm;
+        if (sim_drive_step(&app->drv[k], d->s_mm, d->v_mm_s, &actual) == LSM_OK) {
             sim_drive_state ds;
             sim_drive_get_state(&app->drv[k], &ds);
-            a->actual = actual;
-            a->actual_vel = ds.load_vel;
-        }
-        lsm_cia402_feedback fb;
-        fb.demand = to_counts(a->prof.k.s_mm, cpm[k]);
-        fb.actual = to_counts(a->actual, cpm[k]);
-        fb.velocity = to_counts(a->actual_vel, cpm[k]);
-        fb.standstill = axis_at_rest(app, k);
-        lsm_cia402_update(ax, &fb, now_us);
-        if (a->pp_running && a->prof.mode == NODE_PROF_IDLE && !a->prof.have_after) {
-            a->pp_running = false;
-            lsm_cia402_pp_done(ax);
+            app->actual[k] = actual;
+            app->actual_vel[k] = ds.load_vel;
         }
     }
+    lsm_motion_feedback(&app->mo, &app->co, app->actual, app->actual_vel, now_us);
     app->out_enable = lsm_canopen_drive_enable(&app->co);
     app->out_inpos = lsm_canopen_in_position(&app->co);
     app->cycles++;
@@ -302,23 +135,10 @@ void node_app_cycle(node_app *app, bool estop_active, uint32_t now_us)
 
 void node_app_stop_all(node_app *app)
 {
-    for (unsigned k = 0; k < app->cfg.n_axes; k++) {
-        lsm_cia402 *ax = lsm_canopen_axis(&app->co, k);
-        if (ax->state == LSM_CIA402_OPERATION_ENABLED) {
-            const int16_t keep = ax->abort_option;
-            ax->abort_option = 3; /* quick stop */
-            lsm_cia402_comm_lost(ax);
-            ax->abort_option = keep;
-        }
-    }
-    lsm_co_path_hold(lsm_canopen_path(&app->co), true);
+    lsm_motion_stop_all(&app->mo, &app->co);
 }
 
 bool node_app_at_rest(const node_app *app)
 {
-    for (unsigned k = 0; k < app->cfg.n_axes; k++) {
-        if (!axis_at_rest(app, k))
-            return false;
-    }
-    return !app->path_moving;
+    return lsm_motion_at_rest(&app->mo);
 }

@@ -1,6 +1,7 @@
 /*
  * node_app.h: the application inside lissom-node (node_app_*): the firmware's CANopen node (canopen.h) with its
- * CiA 402 axes and path buffer, the motion that the node asks for (node_prof.h, node_path.h), and one simulated
+ * CiA 402 axes and path buffer, the firmware's CiA 402 motion layer (firmware/motion/motion.h: PP, CSP,
+ * jerk-limited stops, the path feed into the look-ahead planner or the exact-stop executor), and one simulated
  * drive per axis (host_sim/drive.h). Pure computation, like the firmware: frames in, frames out, time as an
  * argument, no I/O. node_main.c connects it to the Linux port; tests can drive it directly.
  *
@@ -8,23 +9,12 @@
  *   1. E-stop level -> lsm_canopen_estop; pending port bus events -> lsm_canopen_bus_event (done by the caller
  *      through node_app_bus_event before the cycle); received frames were served by node_app_rx;
  *   2. lsm_canopen_process (timers, heartbeats, EMCY, path/axis coupling);
- *   3. per axis (CiA 402 mode display 0x6061):
- *        a stop request (halt, quick stop, disable, fault reaction) -> a jerk-limited stop from the present state
- *          (node_stop.h) with: halt/slow 0x6084, quick 0x6085 (jerk 0x2060, snap 0x2061), emergency (E-stop,
- *          following error, application fault) the machine's own limits (the fastest the machine can do);
- *          every requested value is clamped to the machine's limits;
- *        PP: a new set-point -> node_prof_move (0x6086 1 sin², 0 linear ramp: see node_prof.h); at the end
- *          lsm_cia402_pp_done (set of set-points: the next one starts in the following cycle);
- *        CSP: each new 0x607A is passed through: the demand goes linearly from the present demand to it over
- *          the interpolation period 0x60C2 (rounded to whole cycles, at least 1);
- *        path (-1): the path executor moves every axis: the look-ahead planner (node_la.h, default) or the
- *          exact-stop executor (node_path.h);
- *   4. each drive gets its demand (and the demand velocity as feed-forward); the feedback (0x6062, 0x6064,
- *      0x606C in counts with 0x2001) and the standstill go back through lsm_cia402_update / lsm_co_path_update;
+ *   3. lsm_motion_cycle: the demand of every axis (motion.h);
+ *   4. each drive gets its demand (and the demand velocity as feed-forward); its feedback goes back through
+ *      lsm_motion_feedback (0x6062, 0x6064, 0x606C, standstill, PP set-point done);
  *   5. outputs: drive enable = some axis powered; in position = every axis in position.
- * Heartbeat loss, bus-off, NMT state changes reach the axes through canopen.c (0x6007, default quick stop), so
- * they end in the same jerk-limited stops. A plan that the move engine refuses (e.g. a distance too large to
- * represent) is an application fault on that axis: 0x603F = 0x6100, EMCY 0x6100, fault reaction.
+ * Position feedback: the simulated drive's load position and velocity (a drive whose step fails keeps its
+ * previous feedback).
  */
 #ifndef NODE_APP_H
 #define NODE_APP_H
@@ -32,16 +22,15 @@
 #include "canopen.h"
 #include "drive.h"
 #include "machine.h"
-#include "node_la.h"
-#include "node_path.h"
-#include "node_prof.h"
+#include "motion.h"
 
 #ifndef NODE_APP_TXQ
 #define NODE_APP_TXQ 128
 #endif
 #define NODE_APP_PATH_SLOTS_MAX 1024
-#define NODE_APP_PATH_PLANNER 0
-#define NODE_APP_PATH_EXACT 1
+#define NODE_APP_PATH_PLANNER LSM_MOTION_PATH_PLANNER
+#define NODE_APP_PATH_EXACT LSM_MOTION_PATH_EXACT
+#define NODE_APP_LOOKAHEAD_MAX 256  /* largest planner block storage (look-ahead depth, corner transitions included) */
 
 typedef struct node_app_config {
     uint8_t node_id;             /* 1..127 */
@@ -52,20 +41,9 @@ typedef struct node_app_config {
     uint16_t master_timeout_ms;
     uint16_t path_slots;         /* path buffer capacity, 1..NODE_APP_PATH_SLOTS_MAX */
     uint16_t lookahead_blocks;   /* planner storage (0: the machine's lookahead_blocks) */
-    uint8_t path_exec;           /* NODE_APP_PATH_PLANNER (look-ahead, node_la.h) or NODE_APP_PATH_EXACT (node_path.h) */
+    uint8_t path_exec;           /* NODE_APP_PATH_PLANNER (look-ahead, pathfeed.h) or NODE_APP_PATH_EXACT (pathexact.h) */
     const sim_machine *machine;  /* limits and drives; copied */
 } node_app_config;
-
-typedef struct node_axis {
-    node_prof prof;             /* demand of the axis (mm), also in CSP / path (kept in step) */
-    int8_t mode;                /* mode display handled last cycle */
-    bool pp_running;            /* a PP set-point is executing: lsm_cia402_pp_done at its end */
-    bool csp_active;            /* CSP interpolation in progress */
-    double csp_from, csp_to, csp_v, csp_v_prev;
-    uint32_t csp_i, csp_n;
-    double actual, actual_vel;  /* drive feedback (mm, mm/s) */
-    uint32_t plan_errors;
-} node_axis;
 
 typedef struct node_app {
     lsm_canopen co;
@@ -74,13 +52,11 @@ typedef struct node_app {
     node_app_config cfg;
     sim_machine machine;
     double cycle_s;
-    node_axis_limits lim[LSM_MAX_AXES];
-    node_axis ax[LSM_MAX_AXES];
-    node_path path;             /* exact-stop executor (path_exec = EXACT) */
-    node_la la;                 /* look-ahead executor (path_exec = PLANNER) */
-    double path_pos[LSM_MAX_AXES], path_vel[LSM_MAX_AXES]; /* the executor's output this cycle */
-    bool path_moving;
+    lsm_motion mo;                                      /* the CiA 402 motion layer */
+    lsm_pblock la_blocks[NODE_APP_LOOKAHEAD_MAX];       /* its planner storage */
+    lsm_co_path_block la_saved[NODE_APP_LOOKAHEAD_MAX + 1]; /* its block copies (pathfeed.h) */
     sim_drive drv[LSM_MAX_AXES];
+    double actual[LSM_MAX_AXES], actual_vel[LSM_MAX_AXES]; /* drive feedback (mm, mm/s) */
     uint64_t cycles;
     bool estop;
     bool out_enable, out_inpos;
@@ -92,7 +68,8 @@ typedef struct node_app {
  * velocity feed-forward, cycle 1 ms. */
 void node_app_default_machine(sim_machine *m, int n_axes);
 
-/* Errors: LSM_E_NULL, LSM_E_ARG (axes, cycle, path slots), LSM_E_CO_NODE_ID, a drive validation error. */
+/* Errors: LSM_E_NULL, LSM_E_ARG (axes, cycle, path slots, path executor), LSM_E_CO_NODE_ID, a drive validation
+ * error, those of lsm_motion_init. */
 lsm_status node_app_init(node_app *app, const node_app_config *cfg, uint32_t now_us);
 
 lsm_status node_app_rx(node_app *app, const lsm_can_frame *f, uint32_t now_us);

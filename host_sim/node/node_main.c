@@ -149,7 +149,7 @@ static void parse(int argc, char **argv, options *o)
         case O_MASTER: o->master_id = parse_int(optarg, 0, 127, "--master-id"); break;
         case O_MASTER_TMO: o->master_timeout_ms = parse_int(optarg, 0, 65535, "--master-timeout-ms"); break;
         case O_SLOTS: o->path_slots = parse_int(optarg, 1, NODE_APP_PATH_SLOTS_MAX, "--path-slots"); break;
-        case O_LOOKAHEAD: o->lookahead = parse_int(optarg, 8, NODE_LA_BLOCKS, "--lookahead"); break;
+        case O_LOOKAHEAD: o->lookahead = parse_int(optarg, 8, NODE_APP_LOOKAHEAD_MAX, "--lookahead"); break;
         case O_PATH_EXEC:
             if (!strcmp(optarg, "planner"))
                 o->path_exec = NODE_APP_PATH_PLANNER;
@@ -263,14 +263,14 @@ static void trace_row(daemon_state *d, uint32_t now_us)
     r[i++] = cp->free_slots;
     r[i++] = (double)cp->feed_um_s / 1000.0;
     for (unsigned k = 0; k < app->cfg.n_axes; k++) {
-        const node_axis *a = &app->ax[k];
+        const lsm_kin *dm = lsm_motion_demand(&app->mo, k);
         const lsm_cia402 *ax = &app->co.axis[k];
-        r[i++] = a->prof.k.s_mm;
-        r[i++] = a->actual;
-        r[i++] = a->prof.k.v_mm_s;
-        r[i++] = a->prof.k.a_mm_s2;
-        r[i++] = a->prof.k.j_mm_s3;
-        r[i++] = a->prof.k.s_mm - a->actual;
+        r[i++] = dm->s_mm;
+        r[i++] = app->actual[k];
+        r[i++] = dm->v_mm_s;
+        r[i++] = dm->a_mm_s2;
+        r[i++] = dm->j_mm_s3;
+        r[i++] = dm->s_mm - app->actual[k];
         r[i++] = ax->statusword;
         r[i++] = ax->state;
         r[i++] = ax->mode_display;
@@ -469,7 +469,7 @@ int main(int argc, char **argv)
         fprintf(stderr,
                 "lissom-node: path: planner blocks %u, refused %u, restarts %u, underrun restarts %u, stuck %u; "
                 "exact-stop blocks %u\n",
-                app.la.appended, app.la.rejected, app.la.restarts, app.la.underrun_restarts, app.la.stuck,
-                app.path.blocks_done);
+                app.mo.feed.appended, app.mo.feed.rejected, app.mo.feed.restarts, app.mo.feed.underrun_restarts,
+                app.mo.feed.stuck, app.mo.path.blocks_done);
     return 0;
 }

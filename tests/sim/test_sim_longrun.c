@@ -4,7 +4,7 @@
  * - a job longer than the former 3,600 s cap of machine time (G1 X100 at F1: 6,000 s) runs to its end;
  * - a feed hold that nothing resumes is a stall: the run ends with "stalled" about 10 s of machine time after the
  *   machine came to rest, not at a fixed cap;
- * - a hold with a resume pending is waiting, not stalled, however long the wait.
+ * - a hold with a resume pending is waiting, not stalled, however long the wait; so is a dwell (G4 P30).
  * The machine has a 50 ms cycle so that hours of machine time stay a few hundred thousand cycles.
  */
 #include <setjmp.h>
@@ -95,12 +95,24 @@ static void test_long_hold_with_resume_waits(void **state)
     sim_run_free(&r);
 }
 
+static void test_long_dwell_waits(void **state)
+{
+    (void)state;
+    sim_run_result r;
+    const int rc = run("G21 G90 G64\nG1 X10 F600\nG4 P30\nG1 X20\nM2\n", NULL, 0, &r);
+    print_message("G4 P30 between two moves: rc %d, %.1f s %s\n", rc, r.duration_s, rc ? r.err : "");
+    assert_int_equal(rc, 0);
+    assert_true(r.duration_s > 30.0);
+    sim_run_free(&r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_long_job),
         cmocka_unit_test(test_hold_without_resume_stalls),
         cmocka_unit_test(test_long_hold_with_resume_waits),
+        cmocka_unit_test(test_long_dwell_waits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -55,7 +55,7 @@ static void cycles(unsigned n, bool estop, unsigned axis)
         node_app_cycle(&g_app, estop, g_now);
         drain();
         if (g_rec.n < sizeof g_rec.p / sizeof g_rec.p[0]) {
-            g_rec.p[g_rec.n] = g_app.ax[axis].prof.k.s_mm;
+            g_rec.p[g_rec.n] = lsm_motion_demand(&g_app.mo, axis)->s_mm;
             g_rec.state[g_rec.n] = lsm_canopen_axis(&g_app.co, axis)->state;
             g_rec.n++;
         }
@@ -178,7 +178,7 @@ static void test_pp_and_estop(void **state)
     cycles(1500, false, 0);
     assert_true(get(0x6041, 0) & 0x0400);
     assert_int_equal(get(0x6062, 0), 40000);
-    assert_true(g_app.ax[0].prof.k.s_mm == 40.0);
+    assert_true(lsm_motion_demand(&g_app.mo, 0)->s_mm == 40.0);
     double pk[3];
     peaks(r0, g_rec.n, 0.001, pk);
     assert_true(pk[0] <= 100 * (1 + 1e-9) && pk[0] > 90);
@@ -188,7 +188,7 @@ static void test_pp_and_estop(void **state)
     /* E-stop during a move back to 0 */
     pp_go(0, 0);
     cycles(300, false, 0);
-    const double v_before = g_app.ax[0].prof.k.v_mm_s;
+    const double v_before = lsm_motion_demand(&g_app.mo, 0)->v_mm_s;
     assert_true(v_before < -50);
     size_t r1 = g_rec.n;
     cycles(1, true, 0);
@@ -237,7 +237,7 @@ static void test_heartbeat_loss_and_busoff(void **state)
     peaks(r1, g_rec.n, 0.001, pk);
     assert_true(pk[1] <= 1500 * (1 + 1e-6));
     assert_true(pk[2] <= 20000 * (1 + 1e-6));
-    assert_true(g_app.ax[0].prof.k.s_mm < 200.0);
+    assert_true(lsm_motion_demand(&g_app.mo, 0)->s_mm < 200.0);
 
     /* bus-off during a move: silence, a jerk-limited stop, EMCY 0x8140 after the restart */
     boot(NODE_APP_PATH_PLANNER, 0, 0);
@@ -300,7 +300,7 @@ static void path_case(uint8_t exec)
     const int32_t e4[3] = {0, 20000, 0};
     assert_int_equal(block(4, 1, e4, NULL, 40000), 0);
     cycles(50, false, 0);
-    assert_true(g_app.path_moving);
+    assert_true(g_app.mo.path_moving);
     cycles(1500, false, 0);
     assert_int_equal(get(0x6062, 0), 0);
     /* hold and resume on a long line, then clear while moving */
@@ -317,11 +317,11 @@ static void path_case(uint8_t exec)
     assert_int_equal(get(0x6862, 0), 0);
     assert_int_equal(block(6, 1, e6, NULL, 40000), 0);
     cycles(400, false, 0);
-    assert_true(g_app.path_moving);
+    assert_true(g_app.mo.path_moving);
     set(0x5000, 0, 4);
     cycles(600, false, 0);
     assert_int_equal(get(0x5002, 0), 0);
-    assert_false(g_app.path_moving);
+    assert_false(g_app.mo.path_moving);
     const int64_t x_stop = get(0x6062, 0);
     assert_true(x_stop > 0 && x_stop < 60000);
 }

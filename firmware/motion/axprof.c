@@ -1,0 +1,188 @@
+/* axprof.c: one coordinate's motion generator (axprof.h). */
+#include "axprof.h"
+
+#include <string.h>
+
+#include "lsm_math.h"
+
+/* Profile type 0: the snap limit that makes a sin² jerk rise exactly one cycle long (eq 22, t1 = dt), with a
+ * margin of 1e-4 so that the strict rounding rule never needs a second cycle. */
+#define AXPROF_LINEAR_SNAP_MARGIN ((lsm_real)1.0001)
+/* Retarget at cruise: |a| below this fraction of the acceleration limit counts as a = 0 (rounding of the
+ * closed-form evaluation: a few hundred ulps of the real type). */
+#if LSM_REAL_IS_FLOAT
+#define AXPROF_CRUISE_A_REL 1e-5f
+#else
+#define AXPROF_CRUISE_A_REL 1e-9
+#endif
+
+void lsm_axprof_init(lsm_axprof *p, lsm_real cycle_s, lsm_real pos_mm)
+{
+    memset(p, 0, sizeof *p);
+    p->cycle_s = cycle_s;
+    p->k.s_mm = pos_mm;
+    p->origin_mm = p->target_mm = pos_mm;
+    p->mode = LSM_AXPROF_IDLE;
+}
+
+lsm_axprof_limits lsm_axprof_effective(const lsm_axprof_limits *lim, lsm_real cycle_s)
+{
+    lsm_axprof_limits e = *lim;
+    if (lim->profile_type == LSM_AXPROF_TYPE_LINEAR)
+        e.snap_max_mm_s4 = AXPROF_LINEAR_SNAP_MARGIN * (lsm_real)LSM_PI * lim->j_max_mm_s3 / (2 * cycle_s);
+    return e;
+}
+
+static lsm_status plan(lsm_axprof *p, lsm_real target, lsm_real v0, const lsm_axprof_limits *lim)
+{
+    const lsm_axprof_limits e = lsm_axprof_effective(lim, p->cycle_s);
+    lsm_move_request rq;
+    memset(&rq, 0, sizeof rq);
+    rq.n_axes = 1;
+    rq.cycle_s = p->cycle_s;
+    rq.rule = LSM_SCURVE_RULE_STRICT;
+    rq.distance_mm[0] = target - p->k.s_mm;
+    rq.v0_mm_s[0] = v0;
+    rq.v1_mm_s[0] = 0;
+    rq.lim[0].v_max_mm_s = e.v_max_mm_s;
+    rq.lim[0].a_max_mm_s2 = e.a_max_mm_s2;
+    rq.lim[0].j_max_mm_s3 = e.j_max_mm_s3;
+    rq.lim[0].snap_max_mm_s4 = e.snap_max_mm_s4;
+    lsm_status st = lsm_move_plan(&p->mv, &rq);
+    if (st != LSM_OK)
+        return st;
+    p->origin_mm = p->k.s_mm;
+    p->target_mm = target;
+    p->cycle = 0;
+    const lsm_real start = p->origin_mm;
+    st = lsm_stepgen_init(&p->gen, &p->mv, &start);
+    if (st != LSM_OK)
+        return st;
+    p->mode = LSM_AXPROF_MOVE;
+    p->stop_kind = 0;
+    p->have_after = false;
+    return LSM_OK;
+}
+
+/* Retarget at cruise (see axprof.h): true if the new move continues from the cruise velocity. */
+static bool retarget_at_cruise(lsm_axprof *p, lsm_real target, const lsm_axprof_limits *lim)
+{
+    const lsm_real d = target - p->k.s_mm;
+    if (!(p->mode == LSM_AXPROF_MOVE && lsm_fabs(p->k.a_mm_s2) <= AXPROF_CRUISE_A_REL * lim->a_max_mm_s2 &&
+          d * p->k.v_mm_s > 0 && lsm_fabs(p->k.v_mm_s) <= lim->v_max_mm_s))
+        return false;
+    const lsm_move saved = p->mv;
+    const lsm_stepgen saved_gen = p->gen;
+    const lsm_real o = p->origin_mm, t = p->target_mm;
+    const uint32_t c = p->cycle;
+    if (plan(p, target, lsm_fabs(p->k.v_mm_s), lim) == LSM_OK)
+        return true;
+    p->mv = saved;
+    p->gen = saved_gen;
+    p->gen.mv = &p->mv;
+    p->origin_mm = o;
+    p->target_mm = t;
+    p->cycle = c;
+    return false;
+}
+
+lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_limits *lim)
+{
+    if (p->mode == LSM_AXPROF_IDLE) {
+        if (target_mm - p->k.s_mm == 0) {
+            p->target_mm = target_mm;
+            return LSM_OK;
+        }
+        return plan(p, target_mm, 0, lim);
+    }
+    /* moving: continue from the cruise velocity if possible, else stop first */
+    if (retarget_at_cruise(p, target_mm, lim))
+        return LSM_OK;
+    const lsm_axprof_limits e = lsm_axprof_effective(lim, p->cycle_s);
+    const lsm_jstop_limits sl = {e.a_max_mm_s2, e.j_max_mm_s3, e.snap_max_mm_s4};
+    if (p->mode == LSM_AXPROF_MOVE) {
+        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, &sl);
+        if (st != LSM_OK)
+            return st;
+        p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+        p->stop_kind = 0;
+    }
+    if (p->mode == LSM_AXPROF_IDLE)
+        return lsm_axprof_move(p, target_mm, lim);
+    p->have_after = true;
+    p->after_target_mm = target_mm;
+    p->after_lim = *lim;
+    return LSM_OK;
+}
+
+lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
+{
+    p->have_after = false;
+    if (p->mode == LSM_AXPROF_IDLE && p->k.v_mm_s == 0 && p->k.a_mm_s2 == 0)
+        return LSM_OK; /* at rest (an IDLE profile with a velocity is a CSP axis that the caller moves) */
+    if (p->mode == LSM_AXPROF_STOP && p->stop_kind >= kind)
+        return LSM_OK;
+    if (p->mode == LSM_AXPROF_STOP && p->stop.lim.decel_mm_s2 >= lim->decel_mm_s2 &&
+        p->stop.lim.jerk_mm_s3 >= lim->jerk_mm_s3 && p->stop.lim.snap_mm_s4 >= lim->snap_mm_s4) {
+        p->stop_kind = kind; /* the running stop is already at least as fast */
+        return LSM_OK;
+    }
+    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
+    if (st != LSM_OK)
+        return st;
+    p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+    p->stop_kind = kind;
+    if (p->mode == LSM_AXPROF_IDLE)
+        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+    return LSM_OK;
+}
+
+static void step_move(lsm_axprof *p)
+{
+    lsm_real pos;
+    const bool running = lsm_stepgen_next(&p->gen, &pos);
+    p->cycle++;
+    if (!running) {
+        p->k.s_mm = p->target_mm;
+        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+        p->mode = LSM_AXPROF_IDLE;
+        return;
+    }
+    lsm_kin e;
+    lsm_move_eval_cycle(&p->mv, 0, p->cycle, 0, &e);
+    p->k.s_mm = pos;
+    p->k.v_mm_s = e.v_mm_s;
+    p->k.a_mm_s2 = e.a_mm_s2;
+    p->k.j_mm_s3 = e.j_mm_s3;
+}
+
+static void step_stop(lsm_axprof *p)
+{
+    lsm_kin e;
+    const bool running = lsm_jstop_step(&p->stop, p->cycle_s, &e);
+    p->k = e;
+    if (running)
+        return;
+    p->mode = LSM_AXPROF_IDLE;
+    p->stop_kind = 0;
+    if (p->have_after) {
+        p->have_after = false;
+        const lsm_axprof_limits l = p->after_lim;
+        (void)lsm_axprof_move(p, p->after_target_mm, &l);
+    }
+}
+
+bool lsm_axprof_step(lsm_axprof *p)
+{
+    switch (p->mode) {
+    case LSM_AXPROF_MOVE:
+        step_move(p);
+        return true;
+    case LSM_AXPROF_STOP:
+        step_stop(p);
+        return true;
+    default:
+        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+        return false;
+    }
+}

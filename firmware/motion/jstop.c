@@ -1,0 +1,260 @@
+/* jstop.c: the jerk- and snap-limited stop of jstop.h. */
+#include "jstop.h"
+
+#include <string.h>
+
+#include "lsm_math.h"
+
+#define JSTOP_PI ((lsm_real)LSM_PI)
+
+/* Bisection of the intermediate acceleration stops at this relative width: two ulps of the real type. */
+#if LSM_REAL_IS_FLOAT
+#define JSTOP_BISECT_REL 2.4e-7f
+/* A first stage that ends faster than this fraction of the stop's scale overshot v = 0 (braking harder than the
+ * limits undo): a second stage follows. Below it the end velocity is rounding (float: about 100 ulps). */
+#define JSTOP_OVERSHOOT_REL 1e-5f
+#else
+#define JSTOP_BISECT_REL 4e-16
+#define JSTOP_OVERSHOOT_REL 1e-9
+#endif
+/* Upper bound of bisection steps: far more than the width ever needs (about 60 in double), a guard only. */
+#define JSTOP_BISECT_MAX 2000
+
+lsm_real lsm_jstop_ramp_time(lsm_real da_mm_s2, lsm_real j_mm_s3, lsm_real snap_mm_s4, lsm_real *jp_mm_s3,
+                             lsm_real *t1_s, lsm_real *t2_s)
+{
+    const lsm_real J = j_mm_s3, S = snap_mm_s4;
+    lsm_real p = 0, r = 0, c = 0;
+    if (da_mm_s2 > 0) {
+        const lsm_real knee = JSTOP_PI * J * J / (2 * S);
+        if (da_mm_s2 >= knee) {
+            p = J;
+            r = JSTOP_PI * J / (2 * S);
+            c = da_mm_s2 / J - r;
+            if (c < 0)
+                c = 0;
+        } else {
+            r = lsm_sqrt(JSTOP_PI * da_mm_s2 / (2 * S));
+            p = 2 * S * r / JSTOP_PI;
+            c = 0;
+        }
+    }
+    if (jp_mm_s3 != NULL)
+        *jp_mm_s3 = p;
+    if (t1_s != NULL)
+        *t1_s = r;
+    if (t2_s != NULL)
+        *t2_s = c;
+    return 2 * r + c;
+}
+
+/* End velocity (travel frame) without a plateau, for the intermediate acceleration a1. */
+static lsm_real end_velocity(lsm_real v, lsm_real a, lsm_real a1, const lsm_jstop_limits *l)
+{
+    const lsm_real ta = lsm_jstop_ramp_time(lsm_fabs(a - a1), l->jerk_mm_s3, l->snap_mm_s4, NULL, NULL, NULL);
+    const lsm_real tc = lsm_jstop_ramp_time(lsm_fabs(a1), l->jerk_mm_s3, l->snap_mm_s4, NULL, NULL, NULL);
+    return v + (a + a1) * ta / 2 + a1 * tc / 2;
+}
+
+static void add_phase(lsm_jstop *s, lsm_phase_shape shape, lsm_real dur, lsm_real jerk)
+{
+    if (!(dur > 0))
+        return;
+    s->shape[s->n_phases] = shape;
+    s->dur_s[s->n_phases] = dur;
+    s->jerk_mm_s3[s->n_phases] = jerk;
+    s->n_phases++;
+}
+
+static void add_ramp(lsm_jstop *s, lsm_real from, lsm_real to)
+{
+    lsm_real jp, t1, t2;
+    (void)lsm_jstop_ramp_time(lsm_fabs(to - from), s->lim.jerk_mm_s3, s->lim.snap_mm_s4, &jp, &t1, &t2);
+    if (!(t1 > 0))
+        return;
+    const lsm_real sg = to > from ? 1 : -1;
+    add_phase(s, LSM_PHASE_RISE, t1, sg * jp);
+    add_phase(s, LSM_PHASE_CONST, t2, sg * jp);
+    add_phase(s, LSM_PHASE_FALL, t1, sg * jp);
+}
+
+/* State after tau seconds of phase i, from its start state (travel frame). */
+static void advance(const lsm_jstop *s, unsigned i, lsm_real tau, lsm_kin *out)
+{
+    lsm_real u[4];
+    lsm_phase_unit(s->shape[i], s->dur_s[i], tau, u);
+    const lsm_kin k = s->start[i];
+    const lsm_real jk = s->jerk_mm_s3[i];
+    out->j_mm_s3 = jk * u[0];
+    out->a_mm_s2 = k.a_mm_s2 + jk * u[1];
+    out->v_mm_s = k.v_mm_s + k.a_mm_s2 * tau + jk * u[2];
+    out->s_mm = k.s_mm + k.v_mm_s * tau + k.a_mm_s2 * tau * tau / 2 + jk * u[3];
+}
+
+/* The intermediate acceleration a1 (travel frame) and the plateau at it (see jstop.h). */
+static lsm_real intermediate(lsm_real vt, lsm_real at, const lsm_jstop_limits *lim, lsm_real *tb)
+{
+    const lsm_real D = lim->decel_mm_s2;
+    *tb = 0;
+    if (end_velocity(vt, at, 0, lim) <= 0)
+        return 0; /* braking harder than the limits can undo: ramp a to 0, a second stage follows */
+    const lsm_real fd = end_velocity(vt, at, -D, lim);
+    if (fd >= 0) {
+        *tb = fd / D;
+        return -D;
+    }
+    lsm_real lo = -D, hi = 0; /* f(lo) < 0 < f(hi) */
+    for (int it = 0; it < JSTOP_BISECT_MAX && hi - lo > JSTOP_BISECT_REL * (lsm_fabs(lo) + lsm_fabs(hi)); it++) {
+        const lsm_real mid = (lo + hi) / 2;
+        if (mid <= lo || mid >= hi)
+            break; /* no real number left between them */
+        if (end_velocity(vt, at, mid, lim) > 0)
+            hi = mid;
+        else
+            lo = mid;
+    }
+    return (lo + hi) / 2;
+}
+
+/* The direction of travel of a state: that of v, else of a, else of j. */
+static lsm_real direction(lsm_real v, lsm_real a, lsm_real j)
+{
+    const lsm_real x = v != 0 ? v : a != 0 ? a : j;
+    return x > 0 ? 1 : -1;
+}
+
+lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                          const lsm_jstop_limits *lim)
+{
+    if (s == NULL || lim == NULL)
+        return LSM_E_NULL;
+    const lsm_real in[7] = {p_mm, v_mm_s, a_mm_s2, j_mm_s3, lim->decel_mm_s2, lim->jerk_mm_s3, lim->snap_mm_s4};
+    for (int i = 0; i < 7; i++) {
+        int st = lsm_check_finite(in[i]);
+        if (st != 0)
+            return (lsm_status)st;
+    }
+    if (!(lim->decel_mm_s2 > 0) || !(lim->jerk_mm_s3 > 0) || !(lim->snap_mm_s4 > 0))
+        return LSM_E_LIMIT;
+    memset(s, 0, sizeof *s);
+    s->lim = *lim;
+    s->origin_mm = p_mm;
+    s->dir = 1;
+    if (v_mm_s == 0 && a_mm_s2 == 0 && j_mm_s3 == 0)
+        return LSM_OK; /* at rest: nothing to do */
+    s->dir = direction(v_mm_s, a_mm_s2, j_mm_s3);
+    s->start[0].s_mm = 0;
+    s->start[0].v_mm_s = s->dir * v_mm_s;
+    s->start[0].a_mm_s2 = s->dir * a_mm_s2;
+    s->start[0].j_mm_s3 = s->dir * j_mm_s3;
+    lsm_kin k0 = s->start[0];
+    if (j_mm_s3 != 0) { /* release the jerk first (jstop.h) */
+        add_phase(s, LSM_PHASE_FALL, (lsm_real)LSM_PI * lsm_fabs(j_mm_s3) / (2 * lim->snap_mm_s4), k0.j_mm_s3);
+        if (s->n_phases > 0u)
+            advance(s, 0, s->dur_s[0], &k0);
+    }
+    lsm_real tb;
+    const lsm_real a1 = intermediate(k0.v_mm_s, k0.a_mm_s2, lim, &tb);
+    add_ramp(s, k0.a_mm_s2, a1);
+    add_phase(s, LSM_PHASE_CONST, tb, 0);
+    add_ramp(s, a1, 0);
+    s->t_end_s = 0;
+    for (unsigned i = 0; i < s->n_phases; i++) {
+        advance(s, i, s->dur_s[i], &s->start[i + 1]);
+        s->t_end_s += s->dur_s[i];
+    }
+    /* the end is rest by construction (up to rounding); a negative end velocity is the overshoot stage */
+    s->start[s->n_phases].a_mm_s2 = 0;
+    s->start[s->n_phases].j_mm_s3 = 0;
+    s->active = true;
+    return LSM_OK;
+}
+
+/* Travel-frame state k to the axis frame. */
+static void to_axis(const lsm_jstop *s, const lsm_kin *k, lsm_kin *out)
+{
+    out->s_mm = s->origin_mm + s->dir * k->s_mm;
+    out->v_mm_s = s->dir * k->v_mm_s;
+    out->a_mm_s2 = s->dir * k->a_mm_s2;
+    out->j_mm_s3 = s->dir * k->j_mm_s3;
+}
+
+void lsm_jstop_eval(const lsm_jstop *s, lsm_real t_s, lsm_kin *out)
+{
+    lsm_kin k;
+    unsigned i = 0;
+    lsm_real t0 = 0;
+    while (i < s->n_phases && t_s > t0 + s->dur_s[i]) {
+        t0 += s->dur_s[i];
+        i++;
+    }
+    if (i >= s->n_phases)
+        k = s->start[s->n_phases];
+    else
+        advance(s, i, t_s - t0, &k);
+    to_axis(s, &k, out);
+}
+
+static void rest_at(lsm_jstop *s, lsm_real p_mm, lsm_kin *out)
+{
+    s->active = false;
+    s->origin_mm = p_mm;
+    out->s_mm = p_mm;
+    out->v_mm_s = out->a_mm_s2 = out->j_mm_s3 = 0;
+}
+
+/* Advances the clock by dt_s. True while the stage runs; else *past_s is the time beyond its end. */
+static bool advance_time(lsm_jstop *s, lsm_real dt_s, lsm_real *past_s)
+{
+#if LSM_REAL_IS_FLOAT
+    s->tau_s += dt_s;
+    while (s->ph < s->n_phases && s->tau_s >= s->dur_s[s->ph]) {
+        s->tau_s -= s->dur_s[s->ph];
+        s->ph++;
+    }
+    *past_s = s->tau_s;
+    return s->ph < s->n_phases;
+#else
+    s->t_s += dt_s;
+    *past_s = s->t_s - s->t_end_s;
+    return s->t_s < s->t_end_s;
+#endif
+}
+
+/* The state at the present time of a running stage. */
+static void eval_now(const lsm_jstop *s, lsm_kin *out)
+{
+#if LSM_REAL_IS_FLOAT
+    lsm_kin k;
+    advance(s, s->ph, s->tau_s, &k);
+    to_axis(s, &k, out);
+#else
+    lsm_jstop_eval(s, s->t_s, out);
+#endif
+}
+
+bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out)
+{
+    if (!s->active) {
+        rest_at(s, s->origin_mm, out);
+        return false;
+    }
+    lsm_real past;
+    if (advance_time(s, dt_s, &past)) {
+        eval_now(s, out);
+        return true;
+    }
+    const lsm_kin e = s->start[s->n_phases];
+    const lsm_real p_end = s->origin_mm + s->dir * e.s_mm;
+    const lsm_real v_end = s->dir * e.v_mm_s;
+    const lsm_real scale =
+        lsm_fabs(s->start[0].v_mm_s) + lsm_fabs(s->start[0].a_mm_s2) * s->t_end_s + (lsm_real)1e-12;
+    if (lsm_fabs(v_end) > JSTOP_OVERSHOOT_REL * scale) {
+        /* overshoot stage done: stop again from (p_end, v_end, 0) with the rest of this cycle */
+        const lsm_jstop_limits lim = s->lim;
+        if (lsm_jstop_plan(s, p_end, v_end, 0, 0, &lim) == LSM_OK && s->active)
+            return lsm_jstop_step(s, past, out);
+    }
+    rest_at(s, p_end, out);
+    return false;
+}

@@ -1,0 +1,93 @@
+/*
+ * jstop.h: a jerk- and snap-limited stop of one coordinate from any kinematic state (lsm_jstop_*).
+ *
+ * Model. From the state (v0, a0, j0) at the moment the stop is requested, the coordinate is brought to
+ * v = a = j = 0 with the acceleration shaped like the sin² S-curve of scurve.h (Kombarov eq 6). A jerk j0 != 0
+ * (a stop requested inside a jerk phase of a move) is first released to 0 with a cos² fall of j0 within the snap
+ * limit (duration pi |j0| / (2 S), eq 22: no jump in jerk, so the snap stays bounded); the stop is then planned
+ * from the state at its end (v0', a0'), with j = 0, in three segments
+ *
+ *      a |                                      A: ramp a0 -> a1   (jerk pulse: sin² rise, plateau, cos² fall)
+ *     a0 |\                                     B: constant a1 for tB (only when a1 = -D is reached)
+ *        | \                     ___            C: ramp a1 -> 0
+ *      0 +--\-------------------/---> t
+ *        |   \________________/                 in the travel frame (v0 >= 0; the axis frame is mirrored)
+ *    -D  |      A       B       C
+ *
+ * A ramp that changes the acceleration by da with peak jerk Jp has a sin² rise of t1, a plateau of t2 and a
+ * cos² fall of t1 (the T1-T3 intervals of scurve.h): da = Jp (t1 + t2), peak snap = Jp pi / (2 t1) (eq 22).
+ * The shortest ramp within J (jerk) and S (snap): if da >= pi J² / (2 S): Jp = J, t1 = pi J / (2 S),
+ * t2 = da / J - t1; else t2 = 0, t1 = sqrt(pi da / (2 S)), Jp = 2 S t1 / pi. Its duration is T(da) = 2 t1 + t2.
+ * The acceleration is point-symmetric about the middle of a ramp, so its velocity change is (a_s + a_e) T / 2.
+ * The end velocity with no plateau is
+ *      f(a1) = v0 + (a0 + a1) T(|a0 - a1|) / 2 + a1 T(|a1|) / 2
+ * If f(-D) >= 0 the deceleration reaches -D and the plateau lasts tB = f(-D) / D; otherwise a1 in (-D, 0] solves
+ * f(a1) = 0 (bisection; f(-D) < 0 < f(0)). If f(0) <= 0 the coordinate was already braking harder than the
+ * limits can undo in time: ramping the acceleration to 0 as fast as allowed takes it slightly through v = 0,
+ * and a second stop (in the other direction) follows at once. The durations are real numbers (not whole
+ * cycles); the state is evaluated in closed form (scurve.h's phase shapes, eq 15) at every cycle and the last
+ * cycle lands on the exact end. No limit is ever exceeded: |a| <= max(|a0'|, D), |j| <= max(|j0|, J),
+ * |snap| <= S, with |a0'| <= |a0| + pi j0² / (4 S) (the jerk release adds j0 pi |j0| / (4 S) to a).
+ * Time: the double build counts the time since the start of the stop; the float build counts it from the start
+ * of the present phase, since a float clock of tens of seconds would make the steps uneven by a percent (the
+ * ulp of 44 s is 4 µs) and the sampled jerk would step by more than S dt.
+ *
+ * Contexts: every call works on caller-owned memory only, allocates nothing and keeps no global state.
+ * lsm_jstop_plan costs a bisection of up to ~60 (double) / ~30 (float) ramp-time evaluations: it is called from
+ * the control cycle when a stop is requested (bounded time, no loop over the buffer); lsm_jstop_step /
+ * lsm_jstop_eval are closed forms (control cycle). Nothing here is shared between contexts.
+ *
+ * Units: mm (or rad), s; limits D in mm/s², J in mm/s³, S in mm/s⁴ (u/s² .. for rotary axes).
+ */
+#ifndef LSM_JSTOP_H
+#define LSM_JSTOP_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "lsm_config.h"
+#include "scurve.h"
+#include "status.h"
+
+typedef struct lsm_jstop_limits {
+    lsm_real decel_mm_s2;  /* D > 0 */
+    lsm_real jerk_mm_s3;   /* J > 0 */
+    lsm_real snap_mm_s4;   /* S > 0 */
+} lsm_jstop_limits;
+
+#define LSM_JSTOP_PHASES 8  /* the jerk release, two ramps of three phases and the plateau between them */
+
+typedef struct lsm_jstop {
+    lsm_jstop_limits lim;
+    lsm_real dir;                        /* +1 / -1: travel frame -> axis frame */
+    lsm_real origin_mm;                  /* position at the start of the stop */
+    lsm_real t_s;                        /* time since the start of this stage (double build) */
+    unsigned ph;                         /* present phase (float build: time kept within the phase, so the */
+    lsm_real tau_s;                      /*   steps keep their length on long stops); time into it */
+    lsm_real t_end_s;                    /* duration of this stage */
+    unsigned n_phases;
+    lsm_phase_shape shape[LSM_JSTOP_PHASES];
+    lsm_real dur_s[LSM_JSTOP_PHASES];
+    lsm_real jerk_mm_s3[LSM_JSTOP_PHASES]; /* signed amplitude, travel frame */
+    lsm_kin start[LSM_JSTOP_PHASES + 1];   /* travel-frame state at each phase start; [n_phases] = end */
+    bool active;
+} lsm_jstop;
+
+/* Plans a stop from (p, v, a, j). Errors: LSM_E_NULL, LSM_E_NAN/LSM_E_INF (state or limits), LSM_E_LIMIT
+ * (a limit <= 0). A state at rest (v = a = j = 0) gives an inactive stop (nothing to do). Control cycle. */
+lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                          const lsm_jstop_limits *lim);
+
+/* Advances dt_s seconds and writes the state (axis frame). Returns true while stopping; at the end it writes
+ * the exact rest state (v = a = j = 0) and returns false. Control cycle. */
+bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out);
+
+/* Closed-form state at time t_s of the current stage (axis frame), without advancing. Any context. */
+void lsm_jstop_eval(const lsm_jstop *s, lsm_real t_s, lsm_kin *out);
+
+/* Duration (s) of the shortest ramp of |da| within (J, S), and its peak jerk / rise time (t1) / plateau (t2);
+ * the out pointers may be NULL. Any context. */
+lsm_real lsm_jstop_ramp_time(lsm_real da_mm_s2, lsm_real j_mm_s3, lsm_real snap_mm_s4, lsm_real *jp_mm_s3,
+                             lsm_real *t1_s, lsm_real *t2_s);
+
+#endif /* LSM_JSTOP_H */

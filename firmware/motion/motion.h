@@ -1,0 +1,112 @@
+/*
+ * motion.h: the CiA 402 motion layer (lsm_motion_*): what each axis of the CANopen node (canopen.h, cia402.h,
+ * co_path.h) asks for becomes a demand position per control cycle, on caller-owned memory, with no allocation
+ * and time as an argument. The port owns the drives: it sends each demand to its drive and reports the
+ * feedback back. One control cycle of a node:
+ *
+ *   lsm_canopen_estop / lsm_canopen_process (port)  ->  lsm_motion_cycle  ->  drives (port)
+ *       ->  lsm_motion_feedback  ->  lsm_canopen_drive_enable / lsm_canopen_in_position (port outputs)
+ *
+ * lsm_motion_cycle, per axis (CiA 402 mode display 0x6061):
+ *   a stop request (halt, quick stop, disable, fault reaction; lsm_cia402_stop_request) -> a jerk-limited stop
+ *     from the present state (jstop.h, Kombarov eq 6 shape) with: halt / slow 0x6084, quick 0x6085 (jerk
+ *     0x2060, snap 0x2061; profile type 0 replaces the snap as axprof.h says), emergency (E-stop, following
+ *     error, application fault) the machine's own limits (the fastest jerk-limited stop the machine can do);
+ *     every requested value is clamped to the machine's limits. A CSP axis stops from its interpolation
+ *     velocity and the acceleration of its last period (clamped to the stop's deceleration);
+ *   PP (0x6060 = 1): a new set-point -> lsm_axprof_move (0x6086 1 sin², 0 linear ramp: see axprof.h), with
+ *     v = min(0x6081, v_max), a = min(0x6083, 0x6084, a_max), j = min(0x2060, j_max), snap = min(0x2061,
+ *     snap_max); single set-point (bit 5 = 1: REPLACE, retarget from the present state) and set of set-points
+ *     (bit 5 = 0: the next one starts in the cycle after lsm_cia402_pp_done at the end of the active one);
+ *   CSP (0x6060 = 8): each new 0x607A is passed through: the demand goes linearly from the present demand to
+ *     it over the interpolation period 0x60C2 (rounded to whole cycles, at least 1); without a new target the
+ *     demand holds;
+ *   path (-1): the path executor moves every axis: the look-ahead feed (pathfeed.h, default) or the exact-stop
+ *     executor (pathexact.h); its report goes to lsm_co_path_update.
+ * A move the engine refuses (e.g. a distance too large to represent) is an application fault on that axis:
+ * 0x603F = 0x6100, EMCY 0x6100, fault reaction.
+ * lsm_motion_feedback, per axis: demand, actual and velocity in counts (0x6062, 0x6064, 0x606C; counts per mm
+ * 0x2001, rounded to nearest) and the standstill go to lsm_cia402_update; a PP set-point whose move ended is
+ * reported done (lsm_cia402_pp_done).
+ * Heartbeat loss, bus-off, NMT state changes reach the axes through canopen.c (0x6007, default quick stop), so
+ * they end in the same jerk-limited stops.
+ *
+ * Contexts: lsm_motion_cycle, lsm_motion_feedback, lsm_motion_stop_all: the control cycle, which owns the node's
+ * axis objects and path buffer for their duration (canopen.h: one context per node, or serialised calls).
+ * lsm_motion_cycle also runs the path feed's background half (block appends, lsm_interp_prepare) in the same
+ * call: a synchronous loop (pathfeed.h). lsm_motion_init: before the cycle runs. Accessors: the context that
+ * owns the layer.
+ *
+ * Units: mm (or rad), s in the layer; counts, counts/s .. on the bus (cia402.h).
+ */
+#ifndef LSM_MOTION_H
+#define LSM_MOTION_H
+
+#include "axprof.h"
+#include "canopen.h"
+#include "pathexact.h"
+#include "pathfeed.h"
+
+typedef enum lsm_motion_path_exec {
+    LSM_MOTION_PATH_PLANNER = 0,  /* look-ahead feed (pathfeed.h) */
+    LSM_MOTION_PATH_EXACT = 1     /* exact stop at every block end (pathexact.h) */
+} lsm_motion_path_exec;
+
+typedef struct lsm_motion_config {
+    uint8_t n_axes;                       /* 1..LSM_MAX_AXES, as the node's */
+    lsm_real cycle_s;                     /* control cycle, > 0 */
+    lsm_axis_limits lim[LSM_MAX_AXES];    /* the machine's limits per axis, all > 0 */
+    uint8_t path_exec;                    /* lsm_motion_path_exec */
+    lsm_pathfeed_storage feed;            /* planner storage of the look-ahead feed (pathfeed.h) */
+} lsm_motion_config;
+
+typedef struct lsm_motion_axis {
+    lsm_axprof prof;                  /* demand of the axis (mm), also in CSP / path (kept in step) */
+    int8_t mode;                      /* mode display handled last cycle */
+    bool pp_running;                  /* a PP set-point is executing: lsm_cia402_pp_done at its end */
+    bool csp_active;                  /* CSP interpolation in progress */
+    lsm_real csp_from_mm, csp_to_mm, csp_v_mm_s, csp_v_prev_mm_s;
+    uint32_t csp_i, csp_n;            /* cycle within the period, cycles of the period */
+    lsm_real actual_mm, actual_vel_mm_s; /* drive feedback of the last cycle */
+    uint32_t plan_errors;
+} lsm_motion_axis;
+
+typedef struct lsm_motion {
+    uint8_t n_axes;
+    uint8_t path_exec;
+    lsm_real cycle_s;
+    lsm_axis_limits lim[LSM_MAX_AXES];
+    lsm_motion_axis ax[LSM_MAX_AXES];
+    lsm_pathexact path;               /* exact-stop executor (path_exec = EXACT) */
+    lsm_pathfeed feed;                /* look-ahead feed (path_exec = PLANNER) */
+    lsm_real path_pos_mm[LSM_MAX_AXES], path_vel_mm_s[LSM_MAX_AXES]; /* the executor's output this cycle */
+    bool path_moving;
+} lsm_motion;
+
+/* Binds the layer to the node (its axes' present modes) with every axis at rest at 0 mm. Errors: LSM_E_NULL,
+ * LSM_E_ARG (axes, not the node's axis count, cycle, path executor), LSM_E_LIMIT (a limit not finite > 0),
+ * those of lsm_pathfeed_init. Before the cycle runs. */
+lsm_status lsm_motion_init(lsm_motion *m, const lsm_motion_config *cfg, lsm_canopen *co);
+
+/* The demands of this cycle (see above) and the path report. After lsm_canopen_process. Control cycle. */
+void lsm_motion_cycle(lsm_motion *m, lsm_canopen *co);
+
+/* The drives' feedback of this cycle: actual_mm[n_axes], actual_vel_mm_s[n_axes] (NULL: the demand, an ideal
+ * loopback). now_us: the cycle's time. Control cycle, after lsm_motion_cycle. */
+void lsm_motion_feedback(lsm_motion *m, lsm_canopen *co, const lsm_real *actual_mm, const lsm_real *actual_vel_mm_s,
+                         uint32_t now_us);
+
+/* Quick-stops every enabled axis (as for a lost connection with 0x6007 = 3) and holds the path with a quick
+ * stop: for a clean shutdown. Control cycle. */
+void lsm_motion_stop_all(lsm_motion *m, lsm_canopen *co);
+
+/* True when no axis and no path moves. */
+bool lsm_motion_at_rest(const lsm_motion *m);
+
+/* Demand position, velocity, acceleration and jerk of axis k this cycle (mm, mm/s, ...). */
+static inline const lsm_kin *lsm_motion_demand(const lsm_motion *m, unsigned k)
+{
+    return &m->ax[k].prof.k;
+}
+
+#endif /* LSM_MOTION_H */

@@ -362,6 +362,9 @@ static int rec_push(rec *r, const double pos[LSM_MAX_AXES], double feed, uint32_
     return 0;
 }
 
+/* A run that neither moves nor takes a block for this long (machine time, s) has stalled. */
+#define SIM_STALL_S 10.0
+
 static lsm_status append_block(lsm_planner *pl, const pblk *q)
 {
     const lsm_gcode_block *b = &q->b;
@@ -471,14 +474,20 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     lsm_interp_init(ip, pl);
     size_t next = 0, appended = 0;
     bool fin = false;
-    const double max_t = o->max_time_s > 0 ? o->max_time_s : 3600.0;
-    const uint64_t max_cycles = (uint64_t)(max_t / cfg.cycle_s) + 1;
+    /* no cap on machine time unless asked for (long jobs run for hours); a stall ends the run instead */
+    const double max_t = o->max_time_s;
+    const uint64_t max_cycles = max_t > 0 ? (uint64_t)(max_t / cfg.cycle_s) + 1 : UINT64_MAX;
+    const uint64_t stall_cycles = (uint64_t)(SIM_STALL_S / cfg.cycle_s) + 1;
+    uint64_t still = 0; /* cycles without progress */
+    double last_pos[LSM_MAX_AXES];
+    memcpy(last_pos, start, sizeof last_pos);
     double t_append = 0, t_step = 0, t_prep = 0;
     size_t ev = 0;
     int rc = 0;
     uint64_t k_done = 0;
     mf_gate gate = {0};
     for (uint64_t k = 0;; k++) {
+        const size_t next_before = next;
         if (!fin) {
             const bool slow = o->feed_every > 0;
             bool wait = mf_step(p, &gate, next, pl, ip, k, cfg.cycle_s);
@@ -538,7 +547,22 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
             break;
         }
         if (k >= max_cycles) {
-            snprintf(r->err, sizeof r->err, "run exceeded %.0f s of machine time (stuck?)", max_t);
+            snprintf(r->err, sizeof r->err, "run exceeded %.0f s of machine time (--max-time)", max_t);
+            rc = -1;
+            goto done;
+        }
+        /* progress: the setpoint moved, a block was taken, a dwell (G4) runs, or an event (a resume) is still to
+         * come */
+        const bool moved = memcmp(pos, last_pos, sizeof last_pos) != 0;
+        memcpy(last_pos, pos, sizeof last_pos);
+        still = (moved || next != next_before || k < gate.dwell_until || ev < o->n_events) ? 0 : still + 1;
+        if (still >= stall_cycles) {
+            snprintf(r->err, sizeof r->err,
+                     "stalled: no motion and no block taken for %.0f s of machine time (at %.3f s, interpolator %s, "
+                     "G-code line %u, %zu of %zu blocks taken)",
+                     SIM_STALL_S, (double)k * cfg.cycle_s,
+                     s == LSM_INTERP_IDLE ? "idle" : s == LSM_INTERP_HELD ? "held" : "running",
+                     cb ? (unsigned)cb->seq : 0u, next, p->n);
             rc = -1;
             goto done;
         }

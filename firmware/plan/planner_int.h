@@ -130,6 +130,8 @@ void lsm_pl_pctx_init(pctx *pc, const lsm_planner *pl, uint32_t id0, lsm_real of
 void lsm_pl_seek(pctx *pc, lsm_real x);
 /* Lowest cap over [xa, xb]. */
 lsm_real lsm_pl_range_cap(pctx *pc, lsm_real xa, lsm_real xb);
+/* The end of the last block over [xa, xb] whose cap is below v (false: none). */
+bool lsm_pl_last_below(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v, lsm_real *x_end);
 /* A cruise at v fits every cap over [xa, xb]. */
 bool lsm_pl_region_ok(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v);
 

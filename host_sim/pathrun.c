@@ -479,7 +479,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     const uint64_t max_cycles = max_t > 0 ? (uint64_t)(max_t / cfg.cycle_s) + 1 : UINT64_MAX;
     const uint64_t stall_cycles = (uint64_t)(SIM_STALL_S / cfg.cycle_s) + 1;
     uint64_t still = 0; /* cycles without progress */
-    double last_pos[LSM_MAX_AXES];
+    lsm_real last_pos[LSM_MAX_AXES]; /* the setpoints' own type (float on the host-float build) */
     memcpy(last_pos, start, sizeof last_pos);
     double t_append = 0, t_step = 0, t_prep = 0;
     size_t ev = 0;

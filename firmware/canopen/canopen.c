@@ -117,6 +117,12 @@ static const lsm_co_od_entry k_od[] = {
     E_U16(0x5008, 4, R_ | TP_, 0, 0, OFF(path.n_underrun)),
     ENT(0x5010, 0, LSM_CO_T_DOMAIN, LSM_CO_PATH_BLOCK_MAX, W_ | HK_, 0, 0, 0),
     E_U8(0x5020, 0, R_ | TP_, 0, 0, OFF(machine_status)),
+    /* manufacturer, the port's tick statistics (lsm_canopen_set_tick_stats) */
+    E_U8(0x5F00, 0, CONST_, 0, 0, 4),
+    E_U32(0x5F00, 1, R_, 0, 0, OFF(tick_stats.ticks)),
+    E_U32(0x5F00, 2, R_, 0, 0, OFF(tick_stats.overruns)),
+    E_U32(0x5F00, 3, R_, 0, 0, OFF(tick_stats.worst_instr)),
+    E_U16(0x5F00, 4, R_, 0, 0, OFF(tick_stats.bg_load_permille)),
     /* CiA 402, per axis k at index + 0x800·k */
     E_I16(0x6007, 0, RW_, G_AXIS, R_ABORT_OPT, AX(abort_option)),
     E_U16(0x603F, 0, R_ | TP_, G_AXIS, 0, AX(error_code)),
@@ -451,7 +457,9 @@ static void reset_node_now(lsm_canopen *n)
     uint32_t malformed = n->malformed, now_us = n->now_us;
     lsm_canopen_config cfg = n->cfg;
     lsm_can_txq txq = n->txq;
+    lsm_canopen_tick_stats ts = n->tick_stats;
     memset(n, 0, sizeof *n);
+    n->tick_stats = ts;
     n->cfg = cfg;
     n->node_id = cfg.node_id;
     n->n_axes = cfg.n_axes;
@@ -734,4 +742,10 @@ bool lsm_canopen_in_position(const lsm_canopen *n)
             return false;
     }
     return true;
+}
+
+void lsm_canopen_set_tick_stats(lsm_canopen *node, const lsm_canopen_tick_stats *stats)
+{
+    if (node != NULL && stats != NULL)
+        node->tick_stats = *stats;
 }

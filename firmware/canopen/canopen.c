@@ -319,7 +319,10 @@ static void apply_estop_level(lsm_canopen *n)
         lsm_co_path_hold(&n->path, true);
 }
 
-static lsm_status build(lsm_canopen *n, uint32_t now_us)
+/* validated: the node's dictionary as lsm_co_od_init checked it before (an NMT reset node): kept as it is, since the
+ * table is constant and its check (every entry against every other) costs ~200 k instructions on the M4, more
+ * than a control tick may take. NULL: check it (lsm_canopen_init). */
+static lsm_status build(lsm_canopen *n, uint32_t now_us, const lsm_co_od *validated)
 {
     const lsm_canopen_config *cfg = &n->cfg;
     lsm_status st;
@@ -342,7 +345,9 @@ static lsm_status build(lsm_canopen *n, uint32_t now_us)
     oc.base_size = sizeof *n;
     oc.write_hook = od_hook;
     oc.hook_ctx = n;
-    if ((st = lsm_co_od_init(&n->od, &oc)) != LSM_OK)
+    if (validated != NULL)
+        n->od = *validated;
+    else if ((st = lsm_co_od_init(&n->od, &oc)) != LSM_OK)
         return st;
     if ((st = lsm_co_emcy_init(&n->emcy, cfg->node_id)) != LSM_OK)
         return st;
@@ -391,7 +396,7 @@ lsm_status lsm_canopen_init(lsm_canopen *n, const lsm_canopen_config *cfg, uint3
     lsm_status st = lsm_can_txq_init(&n->txq, cfg->tx_storage, cfg->tx_cap);
     if (st != LSM_OK)
         return st;
-    return build(n, now_us);
+    return build(n, now_us, NULL);
 }
 
 /* ---- NMT ----------------------------------------------------------------------------------------- */
@@ -458,6 +463,7 @@ static void reset_node_now(lsm_canopen *n)
     lsm_canopen_config cfg = n->cfg;
     lsm_can_txq txq = n->txq;
     lsm_canopen_tick_stats ts = n->tick_stats;
+    const lsm_co_od od = n->od;
     memset(n, 0, sizeof *n);
     n->tick_stats = ts;
     n->cfg = cfg;
@@ -467,7 +473,7 @@ static void reset_node_now(lsm_canopen *n)
     n->estop = estop;
     n->bus_off = bus_off;
     n->malformed = malformed;
-    (void)build(n, now_us);
+    (void)build(n, now_us, &od);
 }
 
 static void nmt_command(lsm_canopen *n, lsm_co_nmt_cmd cmd)

@@ -64,7 +64,7 @@ NAMES = {
     0x5010: ("Path block", None),
     0x5020: ("Machine status", None),
     0x5F00: ("Tick statistics", {0: "Highest sub-index supported", 1: "Ticks", 2: "Overruns",
-                                 3: "Worst tick instructions", 4: "Background load"}),
+                                 3: "Worst tick instructions", 4: "Background load", 5: "Late wake-ups"}),
     0x6007: ("Abort connection option code", None),
     0x603F: ("Error code", None),
     0x6040: ("Controlword", None),

@@ -80,6 +80,8 @@ typedef struct lsm_canopen_tick_stats {
     uint32_t overruns;          /* sub 2: ticks that fell due while the one before still ran */
     uint32_t worst_instr;       /* sub 3: longest tick, instructions from the timer event to the end of its work */
     uint16_t bg_load_permille;  /* sub 4: share of the CPU the background used over the last second, per mille */
+    uint32_t late_wakes;        /* sub 5: ticks that started late because the sleeping CPU was woken late (an
+                                   emulator's host scheduling; not overruns of the tick's own work) */
 } lsm_canopen_tick_stats;
 
 typedef struct lsm_canopen_config {

@@ -102,7 +102,8 @@ static void tick(void *ctx)
     load_window(&ts);
     lsm_canopen_tick_stats st;
     st.ticks = ts.ticks;
-    st.overruns = ts.overruns;
+    st.overruns = ts.work_overruns;
+    st.late_wakes = ts.late_wakes;
     st.worst_instr = ts.worst_counts * CTL_INSTR_PER_COUNT;
     st.bg_load_permille = g_load.load_permille;
     bool estop = true;
@@ -154,15 +155,13 @@ static void parse_cmdline(uint8_t *node_id, uint8_t *axes)
     }
 }
 
-/* Nothing to do: wait for the next tick, polling (no WFI: see the header comment), and count the wait as idle. */
+/* Nothing to do: sleep until the next interrupt, and count the sleep (ticks excluded) as idle. */
 static void idle_once(void)
 {
     cm_tick_stats s0, s1;
     cm_tick_get_stats(&s0);
     const uint32_t t0 = cm_tick_now_counts();
-    do {
-        cm_tick_get_stats(&s1);
-    } while (s1.ticks == s0.ticks);
+    cm_tick_idle();
     const uint32_t t1 = cm_tick_now_counts();
     cm_tick_get_stats(&s1);
     g_idle_counts += (t1 - t0) - (s1.busy_counts - s0.busy_counts);

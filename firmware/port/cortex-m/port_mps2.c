@@ -24,6 +24,9 @@ static struct {
     volatile uint32_t events;        /* tick events taken by the handler (wraps) */
     volatile uint32_t worst_counts;  /* longest tick, from its timer event to the end of its function */
     volatile uint32_t busy_counts;   /* sum of the handler's own durations (wraps) */
+    volatile bool in_wfi;            /* the main loop sleeps in cm_tick_idle */
+    volatile uint32_t work_overruns; /* ticks longer than a period from their event, sleep latency excluded */
+    volatile uint32_t late_wakes;    /* overruns of ticks that woke from cm_tick_idle and ran less than a period */
     /* microsecond clock: TIMER0 counts down at 25 MHz; us = acc_us + (elapsed counts) / 25 */
     uint32_t last_count;
     uint32_t acc_us;
@@ -52,6 +55,8 @@ lsm_status lsm_port_init(void)
     g_port.events = 0u;
     g_port.worst_counts = 0u;
     g_port.busy_counts = 0u;
+    g_port.work_overruns = 0u;
+    g_port.late_wakes = 0u;
     g_port.can_head = 0u;
     g_port.can_tail = 0u;
     g_port.up = true;
@@ -159,6 +164,8 @@ void cm_tick_get_stats(cm_tick_stats *out)
     uint32_t irq = cm_irq_save();
     out->ticks = g_port.events;
     out->overruns = g_port.overruns;
+    out->work_overruns = g_port.work_overruns;
+    out->late_wakes = g_port.late_wakes;
     out->worst_counts = g_port.worst_counts;
     out->busy_counts = g_port.busy_counts;
     cm_irq_restore(irq);
@@ -207,8 +214,16 @@ void SysTick_Handler(void)
         g_port.overruns++; /* the next tick fell due while this one ran: it starts late */
     /* this handler's duration (one wrap at most is counted), and the tick's length from its timer event */
     const uint32_t dur = late ? c0 + (g_port.reload + 1u) - c1 : c0 - c1;
-    const uint32_t since_event = (g_port.reload - c0) + dur;
+    /* latency: the counts between the timer event and the handler, unless the CPU slept (cm_tick_idle.h): a
+     * wake-up from WFI takes a few cycles on the chip, while under QEMU -icount sleep=on the time slept follows
+     * the host's clock and its scheduling delays */
+    const uint32_t latency = g_port.in_wfi ? 0u : g_port.reload - c0;
+    const uint32_t since_event = latency + dur;
     g_port.busy_counts += dur;
+    if (since_event > g_port.reload + 1u)
+        g_port.work_overruns++;
+    else if (late)
+        g_port.late_wakes++;
     if (since_event > g_port.worst_counts)
         g_port.worst_counts = since_event;
 }
@@ -236,4 +251,11 @@ uint32_t lsm_port_time_us(void)
 void lsm_port_idle(void)
 {
     cm_wfi();
+}
+
+void cm_tick_idle(void)
+{
+    g_port.in_wfi = true;
+    cm_wfi();
+    g_port.in_wfi = false;
 }

@@ -120,6 +120,8 @@ typedef struct lsm_canopen {
     lsm_co_nmt nmt;
     lsm_co_emcy emcy;
     lsm_co_pdo pdo;
+    lsm_co_pdo pdo_boot;             /* the default PDOs as built at init, restored by the resets */
+    bool pdo_boot_valid;
     lsm_co_path path;
     lsm_cia402 axis[LSM_MAX_AXES];
     lsm_can_txq txq;

@@ -82,6 +82,7 @@ typedef struct lsm_canopen_tick_stats {
     uint16_t bg_load_permille;  /* sub 4: share of the CPU the background used over the last second, per mille */
     uint32_t late_wakes;        /* sub 5: ticks that started late because the sleeping CPU was woken late (an
                                    emulator's host scheduling; not overruns of the tick's own work) */
+    uint32_t clock_ms;          /* sub 6: the port's clock (the now_us the node runs on) in ms, wraps */
 } lsm_canopen_tick_stats;
 
 typedef struct lsm_canopen_config {

@@ -141,18 +141,17 @@ class Rig:
         return self
 
     def _tick_stats(self, node):
-        return [node.sdo[0x5F00][i].raw for i in range(1, 6)]
+        return [node.sdo[0x5F00][i].raw for i in range(1, 7)]
 
     def _measure_time_scale(self, span_s=1.0):
-        """Real seconds per node second, from the image's tick counter (0x5F00 sub 1, one tick per 1 ms cycle)
-        over span_s of real time."""
+        """Real seconds per node second, from the image's clock (0x5F00 sub 6, ms) over span_s of real time."""
         node = canopen.RemoteNode(self.cfg.node_id, EDS)
         node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
         self.network.add_node(node)
         try:
-            t0, n0 = time.monotonic(), node.sdo[0x5F00][1].raw
+            t0, n0 = time.monotonic(), node.sdo[0x5F00][6].raw
             time.sleep(span_s)
-            t1, n1 = time.monotonic(), node.sdo[0x5F00][1].raw
+            t1, n1 = time.monotonic(), node.sdo[0x5F00][6].raw
         finally:
             del self.network[self.cfg.node_id]
         return (t1 - t0) / ((n1 - n0) * 1e-3)
@@ -186,7 +185,7 @@ class Rig:
             print("tick statistics: %s" % e, file=sys.stderr)
             return
         self.tick_stats = {"ticks": st[0], "overruns": st[1], "worst_tick_instructions": st[2],
-                           "background_load_permille": st[3], "late_wakes": st[4],
+                           "background_load_permille": st[3], "late_wakes": st[4], "clock_ms": st[5],
                            "tick_budget_instructions": 168000,
                            "time_scale": self.time_scale}
         os.makedirs(self.cfg.out_dir, exist_ok=True)
@@ -271,10 +270,10 @@ class Rig:
 
     def clock_start(self):
         """Start of a window over which the node's clock is compared with real time (clock_scale). None on rigs
-        whose node runs on real time (lissom-node); the M4 image: (real time, its tick counter 0x5F00 sub 1)."""
+        whose node runs on real time (lissom-node); the M4 image: (real time, its clock in ms, 0x5F00 sub 6)."""
         if self.cfg.kind != "mcu":
             return None
-        return time.monotonic(), self.read(0x5F00, 1)
+        return time.monotonic(), self.read(0x5F00, 6)
 
     def clock_scale(self, start):
         """Real seconds per second of the node's clock since clock_start() (1.0 for a real-time node). The M4
@@ -283,8 +282,8 @@ class Rig:
         if start is None:
             return 1.0
         t0, n0 = start
-        t1, n1 = time.monotonic(), self.read(0x5F00, 1)
-        return (t1 - t0) / ((n1 - n0) * 1e-3)
+        t1, n1 = time.monotonic(), self.read(0x5F00, 6)
+        return (t1 - t0) / (((n1 - n0) & 0xFFFFFFFF) * 1e-3)
 
     # ---- NMT -----------------------------------------------------------------------------------------
     def nmt(self, command):

@@ -80,9 +80,9 @@ static void serve_link_tx(ctl_app *a)
     }
 }
 
-void ctl_app_tick(ctl_app *a, bool estop_active, const lsm_canopen_tick_stats *stats)
+void ctl_app_tick(ctl_app *a, uint32_t now_us, bool estop_active, const lsm_canopen_tick_stats *stats)
 {
-    a->now_us = a->n.cycles * a->cycle_us;
+    a->now_us = now_us;
     if (stats != NULL)
         lsm_canopen_set_tick_stats(&a->co, stats);
     serve_link_rx(a);

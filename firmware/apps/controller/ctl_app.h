@@ -21,7 +21,9 @@
  * SDO request must find the node stopped), and one context per node is its contract. An SDO request costs a
  * few thousand instructions at most (segmented path blocks included), measured in the tick's worst case
  * (0x5F00 sub 3).
- * Time: now_us = cycles x cycle_us (the controller's own clock, one tick = one cycle).
+ * Time: now_us comes from the board's clock (a hardware timer, as lsm_port_time_us), not from counting ticks: a
+ * tick that comes late (or is lost) delays the motion by a cycle but not the node's timers (heartbeats, SDO and
+ * heartbeat-consumer timeouts).
  */
 #ifndef CTL_APP_H
 #define CTL_APP_H
@@ -88,9 +90,9 @@ typedef struct ctl_app {
  * Main loop, before the tick. */
 lsm_status ctl_app_init(ctl_app *a, const ctl_app_config *cfg);
 
-/* One control cycle (see above). estop_active: the E-stop input; stats: the port's tick statistics for 0x5F00
- * (may be NULL). Control tick. */
-void ctl_app_tick(ctl_app *a, bool estop_active, const lsm_canopen_tick_stats *stats);
+/* One control cycle (see above) at time now_us (the board's µs clock, wrapping). estop_active: the E-stop input;
+ * stats: the port's tick statistics for 0x5F00 (may be NULL). Control tick. */
+void ctl_app_tick(ctl_app *a, uint32_t now_us, bool estop_active, const lsm_canopen_tick_stats *stats);
 
 /* The background's share of the work; true when something was done. Main loop. */
 bool ctl_app_background(ctl_app *a);

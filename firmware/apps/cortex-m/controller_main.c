@@ -16,7 +16,8 @@
  * and SysTick (25 MHz board clock) counts every 40 ns, i.e. every 40 >> S instructions; the tick period is
  * therefore CTL_TICK_INSTR / (40 >> S) counts. The image is built for CTL_ICOUNT_SHIFT = 3 (docs/cortex_m.md,
  * "Controller image": why 3, and how the guest's time relates to the master's), so one tick is 33,600 counts =
- * 1.344 ms of virtual time. The controller's clock counts ticks (1 ms each): ctl_app.h.
+ * 1.344 ms of virtual time. The node's µs clock is SysTick's count converted at 168 instructions per µs
+ * (clock_us), like a hardware timer: it follows virtual time, not the number of ticks.
  *
  * Tick statistics (0x5F00): ticks, overruns (a tick still running when the next fell due), the worst tick in
  * instructions from its timer event to the end of its work (interrupt latency included), and the background
@@ -54,6 +55,24 @@ _Static_assert(CTL_TICK_INSTR % CTL_INSTR_PER_COUNT == 0u, "the tick must be a w
 static ctl_app g_app;
 static struct ctl_motion g_motion;
 static volatile uint32_t g_idle_counts; /* main loop: SysTick counts spent in WFI, ticks excluded (wraps) */
+
+/* The node's µs clock: SysTick counts since the start, converted at 168 instructions per µs (the modelled core
+ * clock), so it follows QEMU's virtual time (and the chip's clock), not the number of ticks. */
+static struct {
+    uint32_t last_counts;
+    uint32_t rem_instr; /* instructions not yet converted, < CTL_CORE_MHZ */
+    uint32_t us;
+} g_clock;
+
+static uint32_t clock_us(void)
+{
+    const uint32_t c = cm_tick_now_counts();
+    const uint64_t instr = (uint64_t)(c - g_clock.last_counts) * CTL_INSTR_PER_COUNT + g_clock.rem_instr;
+    g_clock.last_counts = c;
+    g_clock.us += (uint32_t)(instr / CTL_CORE_MHZ);
+    g_clock.rem_instr = (uint32_t)(instr % CTL_CORE_MHZ);
+    return g_clock.us;
+}
 
 static struct {
     uint32_t window_ticks;
@@ -106,10 +125,12 @@ static void tick(void *ctx)
     st.late_wakes = ts.late_wakes;
     st.worst_instr = ts.worst_counts * CTL_INSTR_PER_COUNT;
     st.bg_load_permille = g_load.load_permille;
+    const uint32_t now_us = clock_us();
+    st.clock_ms = now_us / 1000u;
     bool estop = true;
     if (lsm_port_gpio_read(LSM_GPIO_IN_ESTOP, &estop) != LSM_OK)
         estop = true; /* fail-safe: an unreadable input stops */
-    ctl_app_tick(a, estop, &st);
+    ctl_app_tick(a, now_us, estop, &st);
     (void)lsm_port_gpio_write(LSM_GPIO_OUT_DRIVE_ENABLE, lsm_canopen_drive_enable(&a->co));
     (void)lsm_port_gpio_write(LSM_GPIO_OUT_IN_POSITION, lsm_canopen_in_position(&a->co));
 }

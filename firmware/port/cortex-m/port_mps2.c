@@ -209,7 +209,9 @@ void SysTick_Handler(void)
     if (fn != NULL)
         fn(g_port.tick_ctx);
     const uint32_t c1 = CM_SYST_CVR;
-    const bool late = (CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u;
+    /* a wrap during the handler: the pending bit, or the counter above where it started (QEMU updates the counter
+     * from its virtual clock at once, the pending bit when it next processes its timers) */
+    const bool late = (CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u || c1 > c0;
     if (late)
         g_port.overruns++; /* the next tick fell due while this one ran: it starts late */
     /* this handler's duration (one wrap at most is counted), and the tick's length from its timer event */

@@ -209,17 +209,22 @@ void SysTick_Handler(void)
     if (fn != NULL)
         fn(g_port.tick_ctx);
     const uint32_t c1 = CM_SYST_CVR;
-    /* a wrap during the handler: the pending bit, or the counter above where it started (QEMU updates the counter
+    /* counts elapsed in the period at entry and at the end (the counter reads 0 at the event itself, then reloads) */
+    const uint32_t period = g_port.reload + 1u;
+    const bool pending = (CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u;
+    const uint32_t e0 = c0 == 0u ? 0u : period - c0;
+    const uint32_t e1 = c1 == 0u && pending ? 0u : period - c1;
+    /* a wrap during the handler: the pending bit, or the period position going back (QEMU updates the counter
      * from its virtual clock at once, the pending bit when it next processes its timers) */
-    const bool late = (CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u || c1 > c0;
+    const bool late = pending || e1 < e0;
     if (late)
         g_port.overruns++; /* the next tick fell due while this one ran: it starts late */
     /* this handler's duration (one wrap at most is counted), and the tick's length from its timer event */
-    const uint32_t dur = late ? c0 + (g_port.reload + 1u) - c1 : c0 - c1;
+    const uint32_t dur = late ? (period - e0) + e1 : e1 - e0;
     /* latency: the counts between the timer event and the handler, unless the CPU slept (cm_tick_idle.h): a
      * wake-up from WFI takes a few cycles on the chip, while under QEMU -icount sleep=on the time slept follows
      * the host's clock and its scheduling delays */
-    const uint32_t latency = g_port.in_wfi ? 0u : g_port.reload - c0;
+    const uint32_t latency = g_port.in_wfi ? 0u : e0;
     const uint32_t since_event = latency + dur;
     g_port.busy_counts += dur;
     if (since_event > g_port.reload + 1u)

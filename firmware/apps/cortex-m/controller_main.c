@@ -34,7 +34,7 @@
 #include "cm_tick.h"
 #include "cm_uart.h"
 #include "ctl_app.h"
-#include "ctl_motion_hold.h"
+#include "ctl_motion_impl.h"
 #include "lsm_port.h"
 
 #include <stdint.h>

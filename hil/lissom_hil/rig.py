@@ -268,6 +268,14 @@ class Rig:
         if not self.cfg.local:
             pytest_mod.skip(why)
 
+    def read_tick_stats(self):
+        """The M4 image's tick statistics (0x5F00) as a dict; None on other nodes."""
+        if self.cfg.kind != "mcu":
+            return None
+        st = [self.read(0x5F00, i) for i in range(1, 7)]
+        return dict(zip(("ticks", "overruns", "worst_tick_instructions", "background_load_permille", "late_wakes",
+                         "clock_ms"), st))
+
     def clock_start(self):
         """Start of a window over which the node's clock is compared with real time (clock_scale). None on rigs
         whose node runs on real time (lissom-node); the M4 image: (real time, its clock in ms, 0x5F00 sub 6)."""

@@ -47,6 +47,7 @@ class McuImage:
         self.elf = elf
         self.proc = None
         self._log = None
+        self.ready_line = ""
 
     @property
     def channel(self):
@@ -64,8 +65,11 @@ class McuImage:
         while True:
             if self.proc.poll() is not None:
                 raise RuntimeError("mcu_node.sh exited with %s (see %s)" % (self.proc.returncode, self.log_path))
-            if self.log_path and READY in open(self.log_path).read():
-                break
+            if self.log_path:
+                ready = [ln for ln in open(self.log_path).read().splitlines() if ln.startswith(READY)]
+                if ready:
+                    self.ready_line = ready[0]
+                    break
             if time.monotonic() > t_end:
                 self.stop()
                 raise RuntimeError("no '%s' line within %.0f s (see %s)" % (READY, timeout, self.log_path))

@@ -268,6 +268,13 @@ class Rig:
         if not self.cfg.local:
             pytest_mod.skip(why)
 
+    @property
+    def has_motion(self):
+        """False only for a controller image built with the interim hold layer (its ready line says motion=hold)."""
+        if self.mcu is None:
+            return True
+        return "motion=hold" not in self.mcu.ready_line
+
     def read_tick_stats(self):
         """The M4 image's tick statistics (0x5F00) as a dict; None on other nodes."""
         if self.cfg.kind != "mcu":
@@ -275,6 +282,30 @@ class Rig:
         st = [self.read(0x5F00, i) for i in range(1, 7)]
         return dict(zip(("ticks", "overruns", "worst_tick_instructions", "background_load_permille", "late_wakes",
                          "clock_ms"), st))
+
+    def node_heartbeat_period(self, state=None, intervals=12, timeout=30.0):
+        """The M4 image's heartbeat period in its own clock (s): waits for a heartbeat (state byte `state`, None:
+        any), reads the node's clock (0x5F00 sub 6) right after it, waits for `intervals` more heartbeats and reads
+        the clock again. Both reads come one SDO round trip after a heartbeat, so their difference is the node time
+        of the intervals (to the difference of the two round trips). Event-based: no wall-clock waits."""
+        nid = self.cfg.node_id
+
+        def pred(f):
+            return f.id == 0x700 + nid and len(f.data) == 1 and (state is None or f.data[0] == state)
+
+        m = self.frames.mark()
+        f = self.frames.wait(pred, timeout, m)
+        if f is None:
+            raise TimeoutError("no heartbeat within %.0f s" % timeout)
+        n0 = self.read(0x5F00, 6)
+        since = self.frames.mark()
+        for _ in range(intervals):
+            f = self.frames.wait(pred, timeout, since)
+            if f is None:
+                raise TimeoutError("heartbeats stopped")
+            since = self.frames.frames.index(f, since) + 1 if hasattr(self.frames, "frames") else self.frames.mark()
+        n1 = self.read(0x5F00, 6)
+        return ((n1 - n0) & 0xFFFFFFFF) * 1e-3 / intervals
 
     def clock_start(self):
         """Start of a window over which the node's clock is compared with real time (clock_scale). None on rigs

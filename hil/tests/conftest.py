@@ -17,6 +17,11 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from lissom_hil.rig import ROOT, Rig, RigConfig  # noqa: E402
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "motion: needs the node's motion layer (PP, CSP, path); skipped on a controller "
+                            "image built with the interim hold layer (firmware/apps/controller/ctl_motion_hold.c)")
+
+
 def pytest_addoption(parser):
     g = parser.getgroup("lissom-hil")
     g.addoption("--rig", default=os.environ.get("LISSOM_RIG", "vcan"), help="vcan (default), can0 / canN, or mcu")
@@ -45,6 +50,8 @@ def rig_session(request):
 def rig(rig_session, request):
     """The rig with a freshly booted node (a new lissom-node process on vcan, an NMT reset of a board)."""
     r = rig_session
+    if request.node.get_closest_marker("motion") is not None and not r.has_motion:
+        pytest.skip("this controller image links the interim hold layer: no motion layer (firmware/motion) on its branch")
     r.set_test_dir(request.node.name)
     mark = r.frames.mark()
     r.start()

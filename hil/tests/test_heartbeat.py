@@ -2,6 +2,8 @@
 (0x1029 = 0), and the 0x6007 reaction (quick stop) brings the axis to a jerk-limited stop."""
 import time
 
+import pytest
+
 from lissom_hil.checks import stop_violations
 
 MASTER_ID = 0x10
@@ -9,6 +11,7 @@ CONSUMER_MS = 200
 QS = dict(quick_decel=1500.0, j=30000.0, snap=3e6)
 
 
+@pytest.mark.motion
 def test_heartbeat_loss(rig):
     nid = rig.node_id
     m0 = rig.frames.mark()

@@ -180,8 +180,11 @@ uint32_t cm_tick_now_counts(void)
         cvr = CM_SYST_CVR;
         p2 = CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET;
     } while (p1 != p2);
+    /* the counter reads 0 at the event itself (then reloads): position 0 of the period that event starts, which
+     * the pending bit (or the handler's count) already includes */
     const uint32_t events = g_port.events + (p2 != 0u ? 1u : 0u);
-    const uint32_t now = events * (g_port.reload + 1u) + (g_port.reload - cvr);
+    const uint32_t pos = cvr == 0u ? 0u : g_port.reload + 1u - cvr;
+    const uint32_t now = events * (g_port.reload + 1u) + pos;
     cm_irq_restore(irq);
     return now;
 }

@@ -64,7 +64,7 @@ def test_path_dense_stream(rig):
     scale = rig.clock_scale(c)
     stats1 = rig.read_tick_stats()
     t_end = time.monotonic() + 60.0
-    while rig.read(0x5005) != N_POINTS or rig.read(0x5003) != rig.read(0x5007):
+    while rig.read(0x5005) != N_POINTS or rig.read(0x5003) != rig.read(0x5007) or not rig.read(0x6041) & 0x0400:
         assert time.monotonic() < t_end, "path not finished: executing %d of %d" % (rig.read(0x5005), N_POINTS)
         time.sleep(0.05)
     t_motion = time.monotonic() - t0

@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <math.h>
 #include <stdlib.h>
@@ -188,27 +189,54 @@ FILE *cli_open_out(const char *dir, const char *name, char *path, size_t n)
     return f;
 }
 
+/* Where the plotter is, in this order: an installed tree (<exe>/../share/lissom/python, the interpreter $LISSOM_PYTHON
+ * or python3 on PATH); a build in the source tree (<repo>/build/bin/lissom-sim: <repo>/hil, the interpreter
+ * $LISSOM_PYTHON or <repo>/.venv/bin/python); else python3 (or $LISSOM_PYTHON) with a pip-installed lissom_hil. */
 int cli_plot(const char *args)
 {
-    char repo[3000];
-    const ssize_t n = readlink("/proc/self/exe", repo, sizeof repo - 1);
+    char exe[3000];
+    const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
     if (n <= 0)
         return -1;
-    repo[n] = '\0';
-    for (int up = 0; up < 3; up++) { /* <repo>/build/bin/lissom-sim -> <repo> */
-        char *slash = strrchr(repo, '/');
-        if (!slash)
-            return -1;
-        *slash = '\0';
-    }
-    char py[3100];
-    const char *env = getenv("LISSOM_PYTHON");
-    if (env && *env)
-        snprintf(py, sizeof py, "%s", env);
-    else
-        snprintf(py, sizeof py, "%s/.venv/bin/python", repo);
-    char cmd[16384];
-    if (snprintf(cmd, sizeof cmd, "PYTHONPATH='%s/hil' '%s' -m lissom_hil.plot %s", repo, py, args) >= (int)sizeof cmd)
+    exe[n] = '\0';
+    char *slash = strrchr(exe, '/'); /* exe = <prefix>/bin */
+    if (!slash)
         return -1;
-    return system(cmd);
+    *slash = '\0';
+    const char *env = getenv("LISSOM_PYTHON");
+    char pypath[3300] = "", py[3300];
+    struct stat st;
+    snprintf(py, sizeof py, "%s", env && *env ? env : "python3");
+    char probe[3300];
+    snprintf(probe, sizeof probe, "%s/../share/lissom/python/lissom_hil/plot.py", exe);
+    if (stat(probe, &st) == 0) {
+        snprintf(pypath, sizeof pypath, "%s/../share/lissom/python", exe);
+    } else {
+        char repo[3000];
+        snprintf(repo, sizeof repo, "%s", exe);
+        for (int up = 0; up < 2; up++) { /* <repo>/build/bin -> <repo> */
+            char *s2 = strrchr(repo, '/');
+            if (s2)
+                *s2 = '\0';
+        }
+        snprintf(probe, sizeof probe, "%s/hil/lissom_hil/plot.py", repo);
+        if (stat(probe, &st) == 0) {
+            snprintf(pypath, sizeof pypath, "%s/hil", repo);
+            snprintf(probe, sizeof probe, "%s/.venv/bin/python", repo);
+            if (!(env && *env) && stat(probe, &st) == 0)
+                snprintf(py, sizeof py, "%s", probe);
+        }
+    }
+    if (strchr(py, '\'') || strchr(pypath, '\''))
+        return -1;
+    char cmd[16384];
+    int w;
+    if (pypath[0])
+        w = snprintf(cmd, sizeof cmd, "PYTHONPATH='%s'${PYTHONPATH:+:$PYTHONPATH} '%s' -m lissom_hil.plot %s", pypath, py, args);
+    else
+        w = snprintf(cmd, sizeof cmd, "'%s' -m lissom_hil.plot %s", py, args);
+    if (w >= (int)sizeof cmd)
+        return -1;
+    const int rc = system(cmd);
+    return rc == -1 ? -1 : (WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + (WIFSIGNALED(rc) ? WTERMSIG(rc) : 0));
 }

@@ -40,8 +40,9 @@ int cli_parse_number(const char *s, double *out);
 int cli_mkdirs(const char *dir);
 /* Opens dir/name for writing, creating dir; the full path goes to path (size n). NULL with a message. */
 FILE *cli_open_out(const char *dir, const char *name, char *path, size_t n);
-/* Runs `python -m lissom_hil.plot ARGS` (ARGS quoted by the caller) with the project's venv python
- * (<repo>/.venv, found from /proc/self/exe = <repo>/build/bin/lissom-sim) or $LISSOM_PYTHON. Returns system()'s status. */
+/* Runs `python -m lissom_hil.plot ARGS` (ARGS quoted by the caller): from an installed tree
+ * (<prefix>/share/lissom/python with python3 or $LISSOM_PYTHON), from the source tree of a build in it (<repo>/hil with
+ * <repo>/.venv or $LISSOM_PYTHON), else python3 with a pip-installed lissom_hil. Returns system()'s status. */
 int cli_plot(const char *args);
 
 /* JSON output helpers: numbers are printed with 17 significant digits (round-trip exact in double);

@@ -29,6 +29,36 @@ static const char *unit_of(char axis)
     return (axis == 'A' || axis == 'B' || axis == 'C') ? "rad" : "mm";
 }
 
+/* The machine functions of the program (gcode.h events) with their source line and the machine time they ran at
+ * (null with --planner vpop, which runs none); a pause (M0/M1) is followed by its resume (the simulator resumes at
+ * once). */
+static void print_events(FILE *f, const sim_run_result *r)
+{
+    fprintf(f, "  \"events\": [");
+    for (size_t i = 0; i < r->n_mfuncs; i++) {
+        const sim_run_mfunc *m = &r->mfuncs[i];
+        const lsm_gcode_event_kind k = m->ev.kind;
+        const bool pause = k == LSM_GCODE_EV_PAUSE || k == LSM_GCODE_EV_OPTIONAL_PAUSE;
+        for (int rep = 0; rep < (pause ? 2 : 1); rep++) {
+            fprintf(f, "%s\n    {\"line\": %u, \"event\": \"%s\", \"code\": \"%s\"", i || rep ? "," : "",
+                    (unsigned)m->ev.line, rep ? "resume" : lsm_gcode_event_name(k),
+                    k == LSM_GCODE_EV_END && m->ev.tool == 30 ? "M30" : lsm_gcode_event_code(k));
+            if (k == LSM_GCODE_EV_SPINDLE_SPEED || k == LSM_GCODE_EV_SPINDLE_CW || k == LSM_GCODE_EV_SPINDLE_CCW)
+                fprintf(f, ", \"rpm\": %.17g", (double)m->ev.value);
+            if (k == LSM_GCODE_EV_DWELL)
+                fprintf(f, ", \"seconds\": %.17g", (double)m->ev.value);
+            if (k == LSM_GCODE_EV_TOOL_SELECT || k == LSM_GCODE_EV_TOOL_CHANGE)
+                fprintf(f, ", \"tool\": %d", (int)m->ev.tool);
+            if (k == LSM_GCODE_EV_TOOL_LENGTH)
+                fprintf(f, ", \"h\": %d", (int)m->ev.tool);
+            fprintf(f, ", \"exact_stop\": %s, \"t\": ", m->ev.exact_stop ? "true" : "false");
+            json_num(f, m->t_s >= 0 ? m->t_s : (double)NAN);
+            fprintf(f, "}");
+        }
+    }
+    fprintf(f, "%s]\n", r->n_mfuncs ? "\n  " : "");
+}
+
 static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *r, const char *program,
                           const char *machine)
 {
@@ -103,7 +133,9 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
     fprintf(f, ", \"prepare_ns_per_piece\": ");
     json_num(f, r->prepare_ns_per_piece);
     fprintf(f, ", \"pieces_prepared\": %u, \"pieces_planned_in_cycle\": %u", r->prepared, r->tick_plans);
-    fprintf(f, "}\n}\n");
+    fprintf(f, "},\n");
+    print_events(f, r);
+    fprintf(f, "}\n");
 }
 
 static void on_progress(void *ctx, sim_run_phase phase, double done, double machine_time_s)
@@ -293,8 +325,11 @@ int cmd_run(int argc, char **argv)
         sim_progress_update(&prog, "plots", -1, -1);
         const int prc = plot_run(out, machine);
         sim_progress_finish(&prog);
-        if (prc != 0)
-            fprintf(stderr, "warning: plotting failed (python -m lissom_hil.plot)\n");
+        if (prc != 0) {
+            fprintf(stderr, "error: --plots: plotting failed (python -m lissom_hil.plot, status %d; see docs/host_sim.md: "
+                            "the plotter needs Python 3 with lissom_hil, numpy and matplotlib)\n", prc);
+            rc = 1;
+        }
     }
     sim_run_free(&r);
     free(text);

@@ -14,6 +14,8 @@ int cmd_bench_clothoid(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_bench_planner(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
+int cmd_check(int argc, char **argv);
+int cmd_stream(int argc, char **argv);
 /* further subcommands declare here, one line each */
 
 #endif

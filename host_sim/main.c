@@ -29,6 +29,8 @@ static const subcommand k_commands[] = {
     {"run", cmd_run, "run a G-code program through the look-ahead planner on a machine (setpoints, limits)"},
     {"bench-planner", cmd_bench_planner, "host benchmark: lissom planner vs the VPOp offline reference (durations, limits, ns)"},
     {"plot", cmd_plot, "draw the PNG plots of a run directory (feed, acceleration, jerk, error, XY path by feed)"},
+    {"check", cmd_check, "list every error and warning of a G-code program (exit 1 if any error)"},
+    {"stream", cmd_stream, "run a G-code program on a Lissom node over SocketCAN (path blocks, progress, hold)"},
     /* further subcommands register here, one line each */
 };
 

@@ -76,6 +76,9 @@ typedef struct pblk {
 typedef struct prog {
     pblk *v;
     size_t n, cap;
+    sim_run_mfunc *ev;  /* machine functions (gcode.h events) */
+    size_t n_ev, cap_ev;
+    size_t n_errors;
     lsm_geom *path; /* the programmed path (X Y Z part of every block) */
     double *s0;     /* cumulative length at the start of each path element */
     uint32_t *pline;/* source line of each path element */
@@ -87,10 +90,32 @@ typedef struct prog {
 static void prog_free(prog *p)
 {
     free(p->v);
+    free(p->ev);
     free(p->path);
     free(p->s0);
     free(p->pline);
     memset(p, 0, sizeof *p);
+}
+
+/* Keeps a line's machine functions; one that needs an exact stop makes the block before it end with one. The end of
+ * the program (M2/M30) is the planner's own final stop. */
+static int prog_events(prog *p, const lsm_gcode_result *res)
+{
+    for (int k = 0; k < res->n_events; k++) {
+        if (p->n_ev == p->cap_ev) {
+            p->cap_ev = p->cap_ev ? 2 * p->cap_ev : 64;
+            sim_run_mfunc *nv = realloc(p->ev, p->cap_ev * sizeof *nv);
+            if (!nv)
+                return -1;
+            p->ev = nv;
+        }
+        const lsm_gcode_event *e = &res->events[k];
+        const size_t before = p->n - res->n_blocks + e->at_block; /* (the line's blocks are in p->v already) */
+        p->ev[p->n_ev++] = (sim_run_mfunc){*e, before, -1.0};
+        if (e->exact_stop && e->kind != LSM_GCODE_EV_END && before > 0 && before <= p->n)
+            p->v[before - 1].tol_mm = 0;
+    }
+    return 0;
 }
 
 static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
@@ -116,10 +141,15 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
             st = lsm_gcode_finish(&g, &res);
         at += used;
         if (res.complete) {
-            if (st != LSM_OK) {
-                snprintf(err, errlen, "G-code line %u column %u: %s", (unsigned)res.err.line, (unsigned)res.err.column,
-                         lsm_status_str(res.err.code));
-                return -1;
+            if (st != LSM_OK) { /* report the first, read on: every refused line is counted */
+                if (p->n_errors++ == 0) {
+                    char why[128];
+                    snprintf(err, errlen, "G-code line %u column %u: %s", (unsigned)res.err.line,
+                             (unsigned)res.err.column, lsm_gcode_error_text(&res.err, why, sizeof why));
+                }
+                if (fin)
+                    break;
+                continue;
             }
             for (int k = 0; k < res.n_blocks; k++) {
                 if (p->n == p->cap) {
@@ -138,12 +168,22 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
                 else
                     q->tol_mm = res.modal.blend_tol_mm > 0 ? res.modal.blend_tol_mm : o->machine->blend_tol_mm;
             }
+            if (prog_events(p, &res) != 0) {
+                snprintf(err, errlen, "out of memory");
+                return -1;
+            }
             if (res.end_of_program)
                 break;
         }
         if (fin)
             break;
     }
+    if (p->n_errors > 1) {
+        const size_t used = strlen(err);
+        snprintf(err + used, errlen - used, " (and %zu more: lissom-sim check lists them)", p->n_errors - 1);
+    }
+    if (p->n_errors)
+        return -1;
     const double *pos = lsm_gcode_position(&g);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         p->end[i] = pos[i];
@@ -326,6 +366,58 @@ static lsm_status append_block(lsm_planner *pl, const pblk *q)
     return lsm_planner_append_line(pl, b->end, &mv);
 }
 
+/* Machine functions run by the Lissom run (see sim_run_mfunc). */
+typedef struct mf_gate {
+    size_t i;              /* next event to run */
+    uint64_t dwell_until;  /* the stream waits up to this cycle (G4) */
+    bool flushed;          /* the planner was flushed for the pending exact stop */
+} mf_gate;
+
+/* True when the machine rests on the programmed end of the blocks before `next`. */
+static bool mf_at_rest(const prog *p, size_t next, const lsm_interp *ip)
+{
+    if (lsm_interp_state_of(ip) != LSM_INTERP_IDLE)
+        return false;
+    const double *want = next > 0 ? p->v[next - 1].b.end : p->v[0].b.start;
+    for (int k = 0; k < LSM_MAX_AXES; k++)
+        if (fabs(ip->pos[k] - want[k]) > 1e-6)
+            return false;
+    return true;
+}
+
+/* Runs the machine functions due before block `next` at cycle k: those without a stop at once; for one with a stop,
+ * the stream waits (the planner is flushed) until the machine rests on the end of the block before it; a dwell then
+ * holds the stream for its whole cycles. Returns true while the stream must wait. */
+static bool mf_step(const prog *p, mf_gate *g, size_t next, lsm_planner *pl, const lsm_interp *ip, uint64_t k,
+                    double cycle_s)
+{
+    if (k < g->dwell_until)
+        return true;
+    while (g->i < p->n_ev && p->ev[g->i].before_block <= next) {
+        sim_run_mfunc *m = &p->ev[g->i];
+        if (m->ev.kind == LSM_GCODE_EV_END)
+            return false; /* the planner's finish is the end's stop; its time is set after the run */
+        if (m->ev.exact_stop && p->n > 0) {
+            if (!g->flushed) {
+                if (lsm_planner_flush(pl) != LSM_OK)
+                    return true;
+                g->flushed = true;
+            }
+            if (!mf_at_rest(p, next, ip))
+                return true;
+        }
+        m->t_s = (double)k * cycle_s;
+        g->i++;
+        g->flushed = false;
+        if (m->ev.kind == LSM_GCODE_EV_DWELL) {
+            g->dwell_until = k + (uint64_t)ceil((double)m->ev.value / cycle_s - 1e-9);
+            if (k < g->dwell_until)
+                return true;
+        }
+    }
+    return false;
+}
+
 static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
 {
     lsm_planner_config cfg;
@@ -369,10 +461,12 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     size_t ev = 0;
     int rc = 0;
     uint64_t k_done = 0;
+    mf_gate gate = {0};
     for (uint64_t k = 0;; k++) {
         if (!fin) {
             const bool slow = o->feed_every > 0;
-            while (next < p->n && lsm_planner_free(pl) >= 3 && (!slow || k % o->feed_every == 0)) {
+            bool wait = mf_step(p, &gate, next, pl, ip, k, cfg.cycle_s);
+            while (!wait && next < p->n && lsm_planner_free(pl) >= 3 && (!slow || k % o->feed_every == 0)) {
                 const double t0 = now_ns();
                 st = append_block(pl, &p->v[next]);
                 t_append += now_ns() - t0;
@@ -390,10 +484,12 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
                 }
                 next++;
                 appended++;
+                wait = gate.i < p->n_ev && p->ev[gate.i].before_block <= next &&
+                       p->ev[gate.i].ev.kind != LSM_GCODE_EV_END; /* run it on the next cycle */
                 if (slow)
                     break;
             }
-            if (next == p->n && lsm_planner_finish(pl) == LSM_OK)
+            if (!wait && next == p->n && lsm_planner_finish(pl) == LSM_OK)
                 fin = true;
         }
         while (ev < o->n_events && o->events[ev].cycle <= k) {
@@ -869,12 +965,20 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
         memcpy(r->start, p.v[0].b.start, sizeof r->start);
     r->prog_blocks = p.n;
     r->prog_length_mm = p.length;
+
     rec out = {0};
     int rc;
     if (o->planner == SIM_RUN_VPOP)
         rc = run_vpop(o, &p, &out, r);
     else
         rc = run_lissom(o, &p, &out, r);
+    r->mfuncs = p.ev; /* the result owns the machine functions from here */
+    r->n_mfuncs = p.n_ev;
+    p.ev = NULL;
+    p.n_ev = 0;
+    for (size_t i = 0; i < r->n_mfuncs && rc == 0 && o->planner != SIM_RUN_VPOP; i++)
+        if (r->mfuncs[i].ev.kind == LSM_GCODE_EV_END)
+            r->mfuncs[i].t_s = r->duration_s;
     if (rc != 0) {
         free(out.q);
         free(out.feed);
@@ -980,6 +1084,9 @@ void sim_run_free(sim_run_result *r)
     free(r->feed);
     free(r->line);
     free(r->act);
+    free(r->mfuncs);
+    r->mfuncs = NULL;
+    r->n_mfuncs = 0;
     r->q = r->feed = r->act = NULL;
     r->line = NULL;
 }

@@ -20,6 +20,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "gcode.h"
 #include "interp.h"
 #include "machine.h"
 #include "planner.h"
@@ -55,6 +56,15 @@ typedef struct sim_run_opts {
     void *progress_ctx;
 } sim_run_opts;
 
+/* A machine function of the program (gcode.h events), where it comes among the blocks and when it ran. The Lissom
+ * planner runs the program up to an event that needs an exact stop, lets the machine come to rest on the end of the
+ * block before it, runs it (G4: the dwell's whole cycles at rest; M0/M1: the pause is resumed at once) and goes on. */
+typedef struct sim_run_mfunc {
+    lsm_gcode_event ev;
+    size_t before_block;       /* index of the first program block after it (= blocks before it) */
+    double t_s;                /* machine time when it ran (s); -1: not run (the VPOp reference runs no events) */
+} sim_run_mfunc;
+
 typedef struct sim_run_result {
     size_t n;                  /* setpoints (one per cycle) */
     double cycle_s;
@@ -86,6 +96,9 @@ typedef struct sim_run_result {
     uint32_t pl_block_bytes;   /* sizeof(lsm_pblock) of this build */
     double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
     double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
+    sim_run_mfunc *mfuncs;     /* the program's machine functions, in order */
+    size_t n_mfuncs;
+    size_t n_gcode_errors;     /* refused lines (the first is in err; `lissom-sim check` lists them all) */
     char err[320];
 } sim_run_result;
 

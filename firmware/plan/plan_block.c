@@ -288,6 +288,21 @@ static void push_corner(lsm_planner *pl, lsm_pblock *prev, const corner_try *ct,
     pl->stats.corners++;
 }
 
+bool lsm_pl_geom_end(const lsm_geom *g, const lsm_real start[LSM_MAX_AXES], const lsm_real prog_end[LSM_MAX_AXES],
+                     lsm_real end[LSM_MAX_AXES])
+{
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        end[i] = start[i];
+    (void)lsm_geom_eval(g, g->len, end, NULL, NULL);
+    /* a geometric end within rounding of the programmed one is the programmed one (exact program ends) */
+    lsm_real d2 = R0, sc = R1;
+    for (int i = 0; i < 3; i++) {
+        d2 += (end[i] - prog_end[i]) * (end[i] - prog_end[i]);
+        sc += lsm_fabs(prog_end[i]);
+    }
+    return lsm_sqrt(d2) <= END_SNAP_EPS * LSM_REAL_EPS * sc;
+}
+
 /* After g was pushed: where the next block starts (the geometric end; lines: the programmed point itself) and the
  * state the next corner needs. */
 static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
@@ -298,16 +313,7 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
             pl->tail_pos[i] = prog_end[i];
     } else {
         lsm_real p[LSM_MAX_AXES];
-        for (int i = 0; i < LSM_MAX_AXES; i++)
-            p[i] = pl->tail_pos[i];
-        (void)lsm_geom_eval(g, g->len, p, NULL, NULL);
-        /* a geometric end within rounding of the programmed one is the programmed one (exact program ends) */
-        lsm_real d2 = R0, sc = R1;
-        for (int i = 0; i < 3; i++) {
-            d2 += (p[i] - prog_end[i]) * (p[i] - prog_end[i]);
-            sc += lsm_fabs(prog_end[i]);
-        }
-        const bool same = lsm_sqrt(d2) <= END_SNAP_EPS * LSM_REAL_EPS * sc;
+        const bool same = lsm_pl_geom_end(g, pl->tail_pos, prog_end, p);
         for (int i = 0; i < LSM_MAX_AXES; i++)
             pl->tail_pos[i] = same ? prog_end[i] : p[i];
     }

@@ -38,28 +38,33 @@ static lsm_real vertex_speed(const lsm_planner *pl, lsm_real h1, lsm_real h2, ls
     return lsm_min2(lsm_sqrt(rho * amin / k), lsm_cbrt(rho * jmin / (c + k * k)));
 }
 
+/* Would a clothoid pair on vertex a (segments prev -> a -> b) limit the feed below `feed` (tolerance eps)? */
+static bool vertex_limits(const lsm_planner *pl, const lsm_real *prev, const lsm_real *a, const lsm_real *b,
+                          lsm_real eps, lsm_real feed)
+{
+    lsm_real u[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = a[k] - prev[k];
+        w[k] = b[k] - a[k];
+    }
+    const lsm_real h1 = lsm_sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    const lsm_real h2 = lsm_sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (!(h1 > R0 && h2 > R0))
+        return false;
+    lsm_real cs = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (h1 * h2);
+    cs = lsm_min2(R1, lsm_max2(-R1, cs));
+    const lsm_real delta = lsm_atan2(lsm_sqrt(lsm_max2(R0, R1 - cs * cs)), cs);
+    return vertex_speed(pl, h1, h2, delta, eps) < feed;
+}
+
 /* Would clothoid pairs on the run's own vertices limit the feed below the programmed one? */
 static bool run_needs_fit(const lsm_planner *pl, uint32_t n)
 {
-    const lsm_real eps = pl->fit_tol;
     const lsm_real *prev = pl->tail_pos;
     for (uint32_t i = 0; i + 1u < n; i++) {
-        const lsm_real *a = pl->fit_pt[i].p, *b = pl->fit_pt[i + 1u].p;
-        lsm_real u[3], w[3];
-        for (int k = 0; k < 3; k++) {
-            u[k] = a[k] - prev[k];
-            w[k] = b[k] - a[k];
-        }
-        const lsm_real h1 = lsm_sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        const lsm_real h2 = lsm_sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-        if (h1 > R0 && h2 > R0) {
-            lsm_real cs = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (h1 * h2);
-            cs = lsm_min2(R1, lsm_max2(-R1, cs));
-            const lsm_real delta = lsm_atan2(lsm_sqrt(lsm_max2(R0, R1 - cs * cs)), cs);
-            if (vertex_speed(pl, h1, h2, delta, eps) < pl->fit_feed)
-                return true;
-        }
-        prev = a;
+        if (vertex_limits(pl, prev, pl->fit_pt[i].p, pl->fit_pt[i + 1u].p, pl->fit_tol, pl->fit_feed))
+            return true;
+        prev = pl->fit_pt[i].p;
     }
     return false;
 }
@@ -77,35 +82,58 @@ static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
     return lsm_fabs(dn) <= PLANE_DOT_TOL;
 }
 
+/* The element a run of the first n pending points is emitted as: one fitted arc or line (true: g, fr) where that
+ * helps (an arc only where the per-vertex transitions would limit the feed, and in the previous block's plane),
+ * else its segments as they are (false). */
+static bool run_element(const lsm_planner *pl, uint32_t n, lsm_geom *g, lsm_arcfit_result *fr)
+{
+    const lsm_real tfit = pl->cfg.fit_share * pl->fit_tol;
+    bool fitted = n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, pl->tail_arc ? pl->tail_n : NULL,
+                                            g, fr);
+    if (fitted && fr->kind == LSM_ARCFIT_ARC && (!arc_fits_tail(pl, fr) || !run_needs_fit(pl, n)))
+        fitted = false;
+    if (fitted && fr->kind == LSM_ARCFIT_LINE) {
+        lsm_real end[LSM_MAX_AXES];
+        for (int i = 0; i < LSM_MAX_AXES; i++)
+            end[i] = i < 3 ? pl->fit_pt[n - 1u].p[i] : pl->tail_pos[i];
+        if (lsm_geom_line_init(g, pl->tail_pos, end) != LSM_OK)
+            fitted = false;
+    }
+    return fitted;
+}
+
+_Static_assert(3 * LSM_ARCFIT_MAX <= 255, "lsm_planner.fit_slots is a uint8_t");
+
+/* Slots a run of n points takes when it is emitted (run_element): one element and the clothoid pair of its corner,
+ * or a block and a corner pair per segment. `fits`, fr: the run's fit; needs_fit: run_needs_fit of the run. */
+static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const lsm_arcfit_result *fr, bool needs_fit)
+{
+    if (n >= 2u && fits && (fr->kind == LSM_ARCFIT_LINE || (needs_fit && arc_fits_tail(pl, fr))))
+        return 3u;
+    return 3u * n;
+}
+
 /* Emits the first n pending points: one fitted arc or line if that helps, else their segments as they are. */
 lsm_status lsm_pl_emit_run(lsm_planner *pl, uint32_t n)
 {
     if (n == 0)
         return LSM_OK;
-    if (lsm_planner_free(pl) < 3u * n)
+    lsm_geom g;
+    lsm_arcfit_result fr;
+    const bool fitted = run_element(pl, n, &g, &fr);
+    if (lsm_planner_free(pl) < (fitted ? 3u : 3u * n))
         return LSM_E_FULL;
-    const lsm_real tfit = pl->cfg.fit_share * pl->fit_tol;
     lsm_planner_move mv;
     mv.feed_mm_s = pl->fit_feed;
     mv.tol_mm = pl->fit_tol;
     mv.rapid = 0;
-    lsm_geom g;
-    lsm_arcfit_result fr;
-    bool fitted = n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, pl->tail_arc ? pl->tail_n : NULL,
-                                            &g, &fr);
-    if (fitted && fr.kind == LSM_ARCFIT_ARC && (!arc_fits_tail(pl, &fr) || !run_needs_fit(pl, n)))
-        fitted = false;
     lsm_real end[LSM_MAX_AXES];
     for (int i = 0; i < LSM_MAX_AXES; i++)
         end[i] = pl->tail_pos[i];
+    lsm_status st = LSM_OK;
     if (fitted) {
         for (int i = 0; i < 3; i++)
             end[i] = pl->fit_pt[n - 1u].p[i];
-        if (fr.kind == LSM_ARCFIT_LINE && lsm_geom_line_init(&g, pl->tail_pos, end) != LSM_OK)
-            fitted = false;
-    }
-    lsm_status st = LSM_OK;
-    if (fitted) {
         mv.seq = pl->fit_pt[n - 1u].seq;
         st = lsm_pl_append_geom(pl, &g, &mv, end, &fr);
     } else {
@@ -121,7 +149,105 @@ lsm_status lsm_pl_emit_run(lsm_planner *pl, uint32_t n)
     for (uint32_t i = n; i < pl->fit_n; i++)
         pl->fit_pt[i - n] = pl->fit_pt[i];
     pl->fit_n -= n;
+    /* (the callers emit the whole run; what would remain is kept at its worst case) */
+    pl->fit_need = pl->fit_n > 0 && run_needs_fit(pl, pl->fit_n) ? 1u : 0u;
+    pl->fit_slots = (uint8_t)(3u * pl->fit_n);
     return st;
+}
+
+/*
+ * The whole pending run, ending exactly on its last point (end of program). An arc fitted in the previous arc's
+ * plane (arcfit.h: consecutive arcs share a plane, so that their corner can be blended) ends off its last point by
+ * that point's distance from the plane (within the fit tolerance; a ring in a tilted plane, rounded to 0.1 um: a
+ * few um). The next block then starts where the arc ends; at the end of the program there is none: the last point
+ * gets a line of its own (lines end exactly on their point), after the run without it.
+ */
+lsm_status lsm_pl_emit_run_exact(lsm_planner *pl)
+{
+    const uint32_t n = pl->fit_n;
+    if (n < 2u)
+        return lsm_pl_emit_run(pl, n);
+    lsm_geom g;
+    lsm_arcfit_result fr;
+    lsm_real end[LSM_MAX_AXES], prog[LSM_MAX_AXES];
+    if (!run_element(pl, n, &g, &fr) || fr.kind != LSM_ARCFIT_ARC)
+        return lsm_pl_emit_run(pl, n);
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        prog[i] = i < 3 ? pl->fit_pt[n - 1u].p[i] : pl->tail_pos[i];
+    if (lsm_pl_geom_end(&g, pl->tail_pos, prog, end))
+        return lsm_pl_emit_run(pl, n);
+    const uint32_t head = run_element(pl, n - 1u, &g, &fr) ? 3u : 3u * (n - 1u);
+    if (lsm_planner_free(pl) < head + 3u) /* the run without its last point, then a line */
+        return LSM_E_FULL;
+    const lsm_status st = lsm_pl_emit_run(pl, n - 1u);
+    return st != LSM_OK ? st : lsm_pl_emit_run(pl, pl->fit_n);
+}
+
+/* Slots the pending run would take when emitted (what lsm_pl_emit_run checks). */
+uint32_t lsm_pl_run_slots(const lsm_planner *pl)
+{
+    return pl->fit_slots;
+}
+
+/*
+ * A point that may join the pending run. The run is held while its points fit one arc or line; the slots its
+ * emission will take are reserved as it grows (run_slots): 3 while it fits one element, so that a full buffer (a
+ * feeder that appends whenever 3 slots are free) still lets runs grow to LSM_ARCFIT_MAX points. (Reserving the
+ * worst case, a block and a corner per point, cut the runs to a point or two once the buffer was full: every
+ * vertex then got its own clothoid pair, whose curvature on the scale of the segments capped the feed; long dense
+ * programs collapsed once the buffer first filled.)
+ */
+static lsm_status add_fit_point(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES], const lsm_planner_move *mv)
+{
+    lsm_status st;
+    bool fits = false, needs = false;
+    lsm_arcfit_result fr;
+    fr.kind = LSM_ARCFIT_NONE;
+    if (pl->fit_n > 0) {
+        lsm_arcfit_pt cand[LSM_ARCFIT_MAX + 1];
+        for (uint32_t i = 0; i < pl->fit_n; i++)
+            cand[i] = pl->fit_pt[i];
+        for (int k = 0; k < 3; k++)
+            cand[pl->fit_n].p[k] = end[k];
+        cand[pl->fit_n].seq = mv->seq;
+        lsm_geom tg;
+        fits = lsm_arcfit_fit(pl->tail_pos, cand, (int)pl->fit_n + 1, pl->cfg.fit_share * mv->tol_mm,
+                              pl->tail_arc ? pl->tail_n : NULL, &tg, &fr);
+        if (!fits) {
+            st = lsm_pl_emit_run(pl, pl->fit_n); /* the run ends before this point (its room was reserved) */
+            if (st != LSM_OK)
+                return st;
+        } else {
+            const lsm_real *prev = pl->fit_n >= 2u ? pl->fit_pt[pl->fit_n - 2u].p : pl->tail_pos;
+            needs = pl->fit_need ||
+                    vertex_limits(pl, prev, pl->fit_pt[pl->fit_n - 1u].p, end, mv->tol_mm, mv->feed_mm_s);
+        }
+    }
+    uint32_t slots = run_slots(pl, pl->fit_n + 1u, fits, &fr, needs);
+    if (lsm_planner_free(pl) < slots) {
+        /* the run with this point could not be emitted: it ends before this point */
+        if (pl->fit_n == 0 || lsm_planner_free(pl) < pl->fit_slots)
+            return LSM_E_FULL;
+        st = lsm_pl_emit_run(pl, pl->fit_n);
+        if (st != LSM_OK)
+            return st;
+        needs = false;
+        slots = 3u;
+        if (lsm_planner_free(pl) < slots)
+            return LSM_E_FULL; /* (the run was emitted; this point is not taken: append it again) */
+    }
+    pl->fit_feed = mv->feed_mm_s;
+    pl->fit_tol = mv->tol_mm;
+    for (int k = 0; k < 3; k++)
+        pl->fit_pt[pl->fit_n].p[k] = end[k];
+    pl->fit_pt[pl->fit_n].seq = mv->seq;
+    pl->fit_n++;
+    pl->fit_need = needs ? 1u : 0u;
+    pl->fit_slots = (uint8_t)slots;
+    pl->stats.appended++;
+    if (pl->fit_n == LSM_ARCFIT_MAX)
+        return lsm_pl_emit_run(pl, pl->fit_n);
+    return LSM_OK;
 }
 
 /* A line that may join the pending polyline run. */
@@ -144,39 +270,5 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
             pl->stats.appended++;
         return st;
     }
-    /* the pending run is emitted early when its worst case (every segment a block) would not fit */
-    if (lsm_planner_free(pl) < 3u * (pl->fit_n + 1u)) {
-        if (pl->fit_n == 0 || lsm_planner_free(pl) < 3u * pl->fit_n)
-            return LSM_E_FULL;
-        st = lsm_pl_emit_run(pl, pl->fit_n);
-        if (st != LSM_OK)
-            return st;
-    }
-    if (pl->fit_n > 0) {
-        lsm_arcfit_pt cand[LSM_ARCFIT_MAX + 1];
-        for (uint32_t i = 0; i < pl->fit_n; i++)
-            cand[i] = pl->fit_pt[i];
-        for (int k = 0; k < 3; k++)
-            cand[pl->fit_n].p[k] = end[k];
-        cand[pl->fit_n].seq = mv->seq;
-        lsm_geom tg;
-        lsm_arcfit_result fr;
-        const bool fits = lsm_arcfit_fit(pl->tail_pos, cand, (int)pl->fit_n + 1, pl->cfg.fit_share * mv->tol_mm,
-                                         pl->tail_arc ? pl->tail_n : NULL, &tg, &fr);
-        if (!fits) {
-            st = lsm_pl_emit_run(pl, pl->fit_n); /* the run ends before this point */
-            if (st != LSM_OK)
-                return st;
-        }
-    }
-    pl->fit_feed = mv->feed_mm_s;
-    pl->fit_tol = mv->tol_mm;
-    for (int k = 0; k < 3; k++)
-        pl->fit_pt[pl->fit_n].p[k] = end[k];
-    pl->fit_pt[pl->fit_n].seq = mv->seq;
-    pl->fit_n++;
-    pl->stats.appended++;
-    if (pl->fit_n == LSM_ARCFIT_MAX)
-        return lsm_pl_emit_run(pl, pl->fit_n);
-    return LSM_OK;
+    return add_fit_point(pl, end, mv);
 }

@@ -201,7 +201,7 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
         if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
             return LSM_E_PL_AXIS;
     /* an arc ends a pending polyline run: emit it first (the arc starts at its last point) */
-    if (pl->fit_n > 0 && lsm_planner_free(pl) < 3u * pl->fit_n + 3u)
+    if (pl->fit_n > 0 && lsm_planner_free(pl) < lsm_pl_run_slots(pl) + 3u)
         return LSM_E_FULL;
     lsm_real from[3];
     for (int i = 0; i < 3; i++)
@@ -241,7 +241,7 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
         return LSM_E_NULL;
     if (pl->finished)
         return LSM_OK;
-    lsm_status st = lsm_pl_emit_run(pl, pl->fit_n);
+    lsm_status st = lsm_pl_emit_run_exact(pl);
     if (st != LSM_OK)
         return st;
     pl->finished = 1;

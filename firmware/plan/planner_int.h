@@ -185,8 +185,16 @@ lsm_status lsm_pl_check_vals(const lsm_real *v, int n);
 /* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
 lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
                               const lsm_arcfit_result *fr);
+/* The geometric end of g (which starts at start) in end; true when it is the programmed end prog_end within
+ * rounding (it is then taken as exactly that point). */
+bool lsm_pl_geom_end(const lsm_geom *g, const lsm_real start[LSM_MAX_AXES], const lsm_real prog_end[LSM_MAX_AXES],
+                     lsm_real end[LSM_MAX_AXES]);
 /* Emits the first n pending polyline points. */
 lsm_status lsm_pl_emit_run(lsm_planner *pl, uint32_t n);
+/* Emits the whole pending run so that it ends exactly on its last point (end of program). */
+lsm_status lsm_pl_emit_run_exact(lsm_planner *pl);
+/* Slots the pending run takes when it is emitted. */
+uint32_t lsm_pl_run_slots(const lsm_planner *pl);
 /* A line that may join the pending polyline run. */
 lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real end[LSM_MAX_AXES],
                                   const lsm_planner_move *mv);

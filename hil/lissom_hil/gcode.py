@@ -1,100 +1,86 @@
-"""A small G-code reader that turns a program into Lissom path blocks (co_path.h) for streaming.
+"""G-code programs as Lissom path blocks (co_path.h), read by the firmware's own parser.
 
-Supported: G0 (rapid: at `rapid_mm_s`), G1, G2/G3 with I J K (incremental centre, the default) or R,
-G17/G18/G19 planes, G20/G21 (inch/mm), G90/G91, F (mm/min), comments "( ... )" and "; ...", N numbers.
-M, S, T and other words are ignored (they have no motion). Axes: X Y Z (and A B C as further coordinates
-that move linearly). Full circles: G2/G3 with I/J and the end equal to the start.
+There is one implementation of the dialect: firmware/gcode/gcode.c. This module runs it through
+`lissom-sim check - --json --blocks` and turns its blocks into path blocks for streaming:
 
-    blocks = read_gcode(text, n_axes=3)   # [Block(type, plane, end_mm, centre_mm, feed_mm_s, line), ...]
+    blocks = read_gcode(text, n_axes=3)   # [Block(type, plane, end, centre, feed, line), ...]
+
+Rapids (G0) come as lines at `rapid_mm_s`; arcs carry their plane code (0 XY, 1 ZX, 2 YZ) and their centre on the
+plane's first and second axis. Machine functions (S, M3, G4, ...) are in `read_program(...).events`.
+Errors raise GcodeError with every message of the program (line, column, the word and the reason).
+The binary is $LISSOM_SIM, else lissom-sim next to $LISSOM_NODE, else this checkout's build/bin, else `lissom-sim`
+on PATH.
 """
-import math
-import re
+import json
+import os
+import shutil
+import subprocess
 from collections import namedtuple
 
 Block = namedtuple("Block", "type plane end centre feed line")
+Program = namedtuple("Program", "blocks events warnings")
 LINE, ARC_CW, ARC_CCW = 1, 2, 3
-PLANES = {17: (0, (0, 1)), 18: (1, (2, 0)), 19: (2, (1, 2))}  # G17 XY, G18 ZX, G19 YZ: (plane code, axes)
-_WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_PLANE_CODE = {17: 0, 18: 1, 19: 2}
+_PLANE_AXES = {17: (0, 1), 18: (2, 0), 19: (1, 2)}
 _AXES = "XYZABC"
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 class GcodeError(ValueError):
     pass
 
 
-def read_gcode(text, n_axes=3, rapid_mm_s=200.0, start=None):
-    pos = list(start) if start is not None else [0.0] * n_axes
-    absolute, unit, plane, feed = True, 1.0, 17, None
-    motion = None
-    out = []
-    for ln, raw in enumerate(text.splitlines(), 1):
-        line = re.sub(r"\(.*?\)", " ", raw).split(";")[0].strip()
-        if not line or line.startswith("%"):
-            continue
-        words = _WORD.findall(line)
-        rest = _WORD.sub("", line).strip()
-        if rest:
-            raise GcodeError("line %d: cannot read %r" % (ln, rest))
-        g_codes = [float(v) for k, v in words if k.upper() == "G"]
-        vals = {}
-        for k, v in words:
-            k = k.upper()
-            if k not in "GMNST":
-                vals[k] = float(v)
-        for g in g_codes:
-            if g in (0, 1, 2, 3):
-                motion = int(g)
-            elif g in (17, 18, 19):
-                plane = int(g)
-            elif g == 20:
-                unit = 25.4
-            elif g == 21:
-                unit = 1.0
-            elif g == 90:
-                absolute = True
-            elif g == 91:
-                absolute = False
-        if "F" in vals:
-            feed = vals["F"] * unit / 60.0
-        target = list(pos)
-        moved = False
-        for i, a in enumerate(_AXES[:n_axes]):
-            if a in vals:
-                target[i] = vals[a] * unit + (0.0 if absolute else pos[i])
-                moved = True
-        if motion is None or not (moved or (motion in (2, 3) and any(k in vals for k in "IJKR"))):
-            continue
-        if motion == 0:
-            out.append(Block(LINE, 0, tuple(target), None, rapid_mm_s, ln))
-        elif motion == 1:
-            if feed is None:
-                raise GcodeError("line %d: G1 without a feed (F)" % ln)
-            out.append(Block(LINE, 0, tuple(target), None, feed, ln))
-        else:
-            if feed is None:
-                raise GcodeError("line %d: G%d without a feed (F)" % (ln, motion))
-            code, (pa, pb) = PLANES[plane]
-            if pa >= n_axes or pb >= n_axes:
-                raise GcodeError("line %d: plane G%d needs axis %s" % (ln, plane, _AXES[max(pa, pb)]))
-            offs = {0: "I", 1: "J", 2: "K"}
-            if "R" in vals:
-                centre = _centre_from_radius(pos, target, pa, pb, vals["R"] * unit, motion == 2, ln)
-            else:
-                centre = (pos[pa] + vals.get(offs[pa], 0.0) * unit, pos[pb] + vals.get(offs[pb], 0.0) * unit)
-            if math.hypot(pos[pa] - centre[0], pos[pb] - centre[1]) == 0:
-                raise GcodeError("line %d: arc with zero radius" % ln)
-            out.append(Block(ARC_CW if motion == 2 else ARC_CCW, code, tuple(target), centre, feed, ln))
-        pos = target
+def find_sim():
+    """The lissom-sim binary: $LISSOM_SIM, this checkout's build/bin/lissom-sim, or lissom-sim on PATH."""
+    env = os.environ.get("LISSOM_SIM")
+    if env:
+        return env
+    node = os.environ.get("LISSOM_NODE")  # the HIL rig's build (run_hil.sh sets it)
+    for local in ([os.path.join(os.path.dirname(node), "lissom-sim")] if node else []) + [
+            os.path.join(ROOT, "build", "bin", "lissom-sim")]:
+        if os.access(local, os.X_OK):
+            return local
+    found = shutil.which("lissom-sim")
+    if found:
+        return found
+    raise FileNotFoundError("lissom-sim not found (build it with scripts/build.sh, install it, or set LISSOM_SIM)")
+
+
+def parse(text, n_axes=3, start=None, sim=None):
+    """The parser's JSON for a program: blocks (mm, mm/s, rad), events and messages."""
+    args = [sim or find_sim(), "check", "-", "--json", "--blocks", "--axes", _AXES[:n_axes]]
+    if start is not None:
+        args += ["--start", ",".join(repr(float(v)) for v in start)]
+    r = subprocess.run(args, input=text.encode(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, check=False)
+    if r.returncode not in (0, 1):
+        raise GcodeError("lissom-sim check failed (%d): %s" % (r.returncode, r.stderr.decode().strip()))
+    out = json.loads(r.stdout)
+    if out["errors"]:
+        raise GcodeError("; ".join("line %d column %d: %s" % (m["line"], m["column"], m["text"])
+                                   for m in out["messages"] if m["severity"] == "error"))
     return out
 
 
-def _centre_from_radius(p, q, a, b, r, cw, ln):
-    dx, dy = q[a] - p[a], q[b] - p[b]
-    d = math.hypot(dx, dy)
-    if d == 0 or abs(r) < d / 2 - 1e-9:
-        raise GcodeError("line %d: R form arc cannot reach its end" % ln)
-    h = math.sqrt(max(r * r - d * d / 4, 0.0))
-    mx, my = p[a] + dx / 2, p[b] + dy / 2
-    # left of the chord for a CCW arc shorter than half a circle; R < 0 asks for the longer arc
-    sgn = (1 if not cw else -1) * (1 if r > 0 else -1)
-    return (mx - sgn * h * dy / d, my + sgn * h * dx / d)
+def read_program(text, n_axes=3, rapid_mm_s=200.0, start=None, sim=None):
+    """Blocks, machine functions (dicts with line, event, code, before_block, exact_stop, tool, value) and
+    warnings of a program."""
+    out = parse(text, n_axes, start, sim)
+    blocks = []
+    for b in out["blocks"]:
+        end = tuple(b["end"][:n_axes])
+        if b["type"] == "arc":
+            pa, pb = _PLANE_AXES[b["plane"]]
+            if pa >= n_axes or pb >= n_axes:
+                raise GcodeError("line %d: plane G%d needs axis %s" % (b["line"], b["plane"], _AXES[max(pa, pb)]))
+            blocks.append(Block(ARC_CW if b["dir"] < 0 else ARC_CCW, _PLANE_CODE[b["plane"]], end,
+                                (b["centre"][pa], b["centre"][pb]), b["feed_mm_s"], b["line"]))
+        else:
+            feed = rapid_mm_s if b["type"] == "rapid" else b["feed_mm_s"]
+            blocks.append(Block(LINE, 0, end, None, feed, b["line"]))
+    warnings = [m for m in out["messages"] if m["severity"] == "warning"]
+    return Program(blocks, out["events"], warnings)
+
+
+def read_gcode(text, n_axes=3, rapid_mm_s=200.0, start=None, sim=None):
+    """The program's motion as path blocks (see the module doc)."""
+    return read_program(text, n_axes, rapid_mm_s, start, sim).blocks

@@ -307,6 +307,12 @@ class Rig:
         n1 = self.read(0x5F00, 6)
         return ((n1 - n0) & 0xFFFFFFFF) * 1e-3 / intervals
 
+    def require_socketcan(self, pytest_mod, why="needs a SocketCAN interface for a second tool on the bus; the M4 image "
+                                                "is reached over slcan on TCP, which takes one client (slcand would give "
+                                                "one: docs/cortex_m.md)"):
+        if self.cfg.kind == "mcu":
+            pytest_mod.skip(why)
+
     def clock_start(self):
         """Start of a window over which the node's clock is compared with real time (clock_scale). None on rigs
         whose node runs on real time (lissom-node); the M4 image: (real time, its clock in ms, 0x5F00 sub 6)."""

@@ -586,12 +586,12 @@ static void test_err_unknown_missing_syntax(void **state)
 {
     (void)state;
     expect_error(NULL, "G1 X1 Q5", LSM_E_GC_UNKNOWN_WORD, 7);
-    expect_error(NULL, "G4 P1", LSM_E_GC_UNKNOWN_WORD, 1);
-    expect_error(NULL, "G0 X1 M3", LSM_E_GC_UNKNOWN_WORD, 7);
+    expect_error(NULL, "G4.5 P1", LSM_E_GC_UNKNOWN_WORD, 1);
+    expect_error(NULL, "G0 X1 M47", LSM_E_GC_UNKNOWN_WORD, 7);
     expect_error(NULL, "G61.1", LSM_E_GC_UNKNOWN_WORD, 1);
     expect_error(NULL, "G1.5 X1", LSM_E_GC_UNKNOWN_WORD, 1);
     expect_error(NULL, "G-1 X1", LSM_E_GC_UNKNOWN_WORD, 1);
-    expect_error(NULL, "T1", LSM_E_GC_UNKNOWN_WORD, 1);
+    expect_error(NULL, "E1", LSM_E_GC_UNKNOWN_WORD, 1);
     expect_error(NULL, "G1 X1e3", LSM_E_GC_UNKNOWN_WORD, 6); /* no exponents in G-code */
     expect_error(NULL, "G1 X", LSM_E_GC_MISSING_ARG, 4);
     expect_error(NULL, "G1 X- Y2", LSM_E_GC_MISSING_ARG, 4);
@@ -699,7 +699,7 @@ static void test_err_repeat_modal_feed(void **state)
     expect_error(NULL, "G17 G18", LSM_E_GC_MODAL_CONFLICT, 5);
     expect_error(NULL, "G61 G64", LSM_E_GC_MODAL_CONFLICT, 5);
     expect_error(NULL, "M2 M30", LSM_E_GC_MODAL_CONFLICT, 4);
-    expect_error(NULL, "G0 X1 G80", LSM_E_GC_MODAL_CONFLICT, 7);
+    expect_error(NULL, "G0 X1 G1", LSM_E_GC_MODAL_CONFLICT, 7);
     expect_error(NULL, "G1 X10", LSM_E_GC_NO_FEED, 1);
     expect_error("G1 F0\n", "Y10", LSM_E_GC_NO_FEED, 1);
     expect_error(NULL, "G2 X10 Y0 I5", LSM_E_GC_NO_FEED, 1);
@@ -735,8 +735,8 @@ static void test_err_arcs(void **state)
     expect_error("F100\n", "G17 G2 X10 I5 K1", LSM_E_GC_ARC_FORM, 15);
     expect_error("F100\n", "G18 G2 X10 I5 J1", LSM_E_GC_ARC_FORM, 15);
     expect_error("F100\n", "G19 G2 Y10 J5 I1", LSM_E_GC_ARC_FORM, 15);
-    expect_error("F100\n", "G2 I5", LSM_E_GC_ARC_FORM, 1);
-    expect_error("F100\n", "G2 Z5 I5", LSM_E_GC_ARC_FORM, 1);
+    expect_error("F100\n", "G2 R5", LSM_E_GC_ARC_FORM, 1); /* R form needs an end word (centre form does not) */
+    expect_error("F100\n", "G2 Z5 R5", LSM_E_GC_ARC_FORM, 1);
     expect_error("F100\n", "G2", LSM_E_GC_ARC_FORM, 1);
     expect_error("F100\n", "G64 P0.1 G2 X10 I5", LSM_E_GC_ARC_FORM, 5);
     /* P turns */

@@ -16,12 +16,14 @@
  * position equals the demand of the same cycle (0x6064 = 0x6062, following error 0), and the velocity is the
  * demand's. The motion layer's limits are therefore checked on the demand, not on a drive.
  *
- * Implementations (one is linked into the image):
- *   ctl_motion_hold.c   INTERIM, until the CiA 402 layer lands in firmware/motion: every axis holds its
- *                       position; a PP or CSP set-point and a path block are refused (application fault 0x6100,
- *                       EMCY; path block rejected with EMCY 0xFF01) so that a master sees at once that this image
- *                       cannot move. Stop requests complete at once (the axis is at rest).
- * Each implementation defines struct ctl_motion in its own header (the image allocates it statically).
+ * Implementations (one is linked into the image; firmware/apps/controller/CMakeLists.txt chooses):
+ *   ctl_motion_cia402.c the CiA 402 layer of firmware/motion (lsm_motion_*), when that component exists;
+ *   ctl_motion_hold.c   INTERIM, until it does: every axis holds its position; a PP or CSP set-point and a path
+ *                       block are refused (application fault 0x6100, EMCY; path block rejected with EMCY 0xFF01) so
+ *                       that a master sees at once that this image cannot move. Stop requests complete at once
+ *                       (the axis is at rest).
+ * Each implementation defines struct ctl_motion in its own header (ctl_motion_impl.h picks it; the image
+ * allocates it statically).
  */
 #ifndef CTL_MOTION_H
 #define CTL_MOTION_H

@@ -1,4 +1,4 @@
-"""A dense path program streamed over CAN while it runs: 160 points 0.5 mm apart (a gentle sine in XY, the kind of
+"""A dense path program streamed over CAN while it runs: 100 points 0.5 mm apart (a gentle sine in XY, the kind of
 polyline CAM output makes) at 5 mm/s, so the node has to take in 10 blocks per second of its clock from the
 stream (0x5010 segmented downloads with flow control) and keep its look-ahead ahead of the interpolator.
 
@@ -22,7 +22,7 @@ import pytest
 from lissom_hil.gcode import read_gcode
 from lissom_hil.path_stream import PathStreamer
 
-N_POINTS = 160
+N_POINTS = 100
 STEP_MM = 0.5
 FEED_MM_MIN = 300  # 5 mm/s: 10 blocks/s of 0.5 mm
 SYNC_S = 0.02
@@ -56,14 +56,15 @@ def test_path_dense_stream(rig):
     sent.append((time.monotonic(), 8))
     m_run = rig.frames.mark()
     rig.write(0x5000, 1)
-    streamer.stream(blocks[8:], first_seq=9, timeout=120.0,
+    # (generous: Python inside the HIL VM on a loaded host streams about one block per second)
+    streamer.stream(blocks[8:], first_seq=9, timeout=600.0,
                     on_block=lambda i: sent.append((time.monotonic(), 8 + i)))
     t_stream = time.monotonic() - t0
     m_end = rig.frames.mark()
     under_mid = rig.read(0x5008, 4) - under0  # before the end of the program: must be 0
     scale = rig.clock_scale(c)
     stats1 = rig.read_tick_stats()
-    t_end = time.monotonic() + 60.0
+    t_end = time.monotonic() + 120.0
     while rig.read(0x5005) != N_POINTS or rig.read(0x5003) != rig.read(0x5007) or not rig.read(0x6041) & 0x0400:
         assert time.monotonic() < t_end, "path not finished: executing %d of %d" % (rig.read(0x5005), N_POINTS)
         time.sleep(0.05)

@@ -242,7 +242,10 @@ void lsm_motion_cycle(lsm_motion *m, lsm_canopen *co)
 static int32_t to_counts(lsm_real x_mm, lsm_real cpm)
 {
 #if LSM_REAL_IS_FLOAT
-    const lsm_real c = (lsm_real)llroundf(x_mm * cpm);
+    /* half away from zero like llroundf, without its 64-bit conversion (libgcc's __aeabi_f2lz goes through
+     * software double on the Cortex-M4F) */
+    const lsm_real x = x_mm * cpm;
+    const lsm_real c = x >= 0 ? lsm_floor(x + (lsm_real)0.5) : -lsm_floor((lsm_real)0.5 - x);
 #else
     const lsm_real c = (lsm_real)llround(x_mm * cpm);
 #endif

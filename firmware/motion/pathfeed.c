@@ -218,8 +218,12 @@ static void feed_blocks(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm)
 {
     lsm_co_path_block b;
     while (lsm_planner_free(&pf->pl) >= LSM_PATHFEED_FREE_MIN && lsm_co_path_peek(cp, 0, &b)) {
+        const lsm_status st = append(pf, &b, cpm);
+        if (st == LSM_E_FULL)
+            break; /* no room yet (the planner emitted the G1 points it held for arc fitting, planner.h): the block
+                    * stays first in the node's buffer and is appended again on a later cycle */
         (void)lsm_co_path_pop(cp, &b);
-        if (append(pf, &b, cpm) != LSM_OK) {
+        if (st != LSM_OK) {
             pf->rejected++;
             lsm_co_path_reject(cp, b.seq);
             break;

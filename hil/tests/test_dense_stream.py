@@ -36,13 +36,6 @@ def _program():
     return "\n".join(lines) + "\n"
 
 
-# Known failure outside this test (2026-11-26, after main's planner commit 2748c68): the path feed (lissom-node's
-# node_la.c, firmware/motion's pathfeed.c) takes LSM_E_FULL from lsm_planner_append_line for a refused block and
-# rejects it (EMCY 0xFF01, then 0x08000022 for the next download). The planner returns LSM_E_FULL for a dense point
-# it cannot take yet while it holds a run for arc fitting ("append it again", plan_fit.c); the feed should keep the
-# block and retry it the next cycle. Seen at block 31 on lissom-node and block 76 on the M4 image.
-@pytest.mark.xfail(reason="the path feed rejects a block the planner answered LSM_E_FULL (EMCY 0xFF01): not this "
-                          "test's code; see the comment above", strict=False)
 @pytest.mark.motion
 def test_path_dense_stream(rig):
     blocks = read_gcode(_program(), n_axes=3)

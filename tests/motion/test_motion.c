@@ -441,6 +441,37 @@ static void test_path_exact(void **state)
     path_case(PATH_EXACT);
 }
 
+/* A dense G1 polyline (a gentle sine in XY, 0.5 mm steps at 5 mm/s, as CAM writes it) streamed with the flow control:
+ * the planner holds points for arc fitting and answers LSM_E_FULL for a point it cannot take yet ("append it
+ * again"); the feed must keep that block and retry it, never reject it. Every block runs once, the end is exact. */
+static void test_path_dense_polyline(void **state)
+{
+    (void)state;
+    boot(PATH_PLANNER, 0, 0);
+    for (unsigned k = 0; k < 3; k++)
+        enable(k, LSM_CIA402_MODE_PATH);
+    set(0x5000, 0, 1);
+    enum { N_POINTS = 200 };
+    int32_t end[3] = {0, 0, 0};
+    for (uint32_t i = 1; i <= N_POINTS; i++) {
+        const double x_mm = 0.5 * i; /* 1000 counts/mm */
+        end[0] = (int32_t)lround(1000.0 * x_mm);
+        end[1] = (int32_t)lround(1000.0 * 2.0 * sin(x_mm / 8.0));
+        unsigned waited = 0;
+        while (block(i, 1, end, NULL, 5000) != 0) { /* the node's buffer is full: let it run */
+            cycles(1, false, 0);
+            assert_true(++waited < 5000u);
+        }
+    }
+    cycles(25000, false, 0);
+    assert_int_equal(count_sent(0x80u + NID, 0xFF01), 0); /* no block refused */
+    assert_int_equal(g_app.mo.feed.rejected, 0);
+    assert_int_equal(get(0x5005, 0), N_POINTS);
+    assert_int_equal(get(0x6062, 0), end[0]);
+    assert_int_equal(get(0x6862, 0), end[1]);
+    assert_false(g_app.mo.path_moving);
+}
+
 static void test_csp(void **state)
 {
     (void)state;
@@ -464,6 +495,7 @@ int main(void)
         cmocka_unit_test(test_pp_and_estop), cmocka_unit_test(test_pp_setpoints),
         cmocka_unit_test(test_heartbeat_loss_and_busoff),
         cmocka_unit_test(test_path_planner), cmocka_unit_test(test_path_exact), cmocka_unit_test(test_csp),
+        cmocka_unit_test(test_path_dense_polyline),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

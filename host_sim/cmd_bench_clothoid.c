@@ -48,9 +48,11 @@ static lsm_status bc_arc(lsm_geom *g, const double V[3], const double t[2], doub
     const double c[3] = {V[0] - s * t[1] * r, V[1] + s * t[0] * r, V[2]};
     const double a0 = atan2(V[1] - c[1], V[0] - c[0]);
     const double a1 = ends_at_v ? a0 - turn : a0 + turn;
-    const double o[3] = {c[0] + r * cos(a1), c[1] + r * sin(a1), V[2]};
-    return ends_at_v ? lsm_geom_arc_init(g, o, V, c, LSM_GEOM_PLANE_XY, turn > 0 ? 1 : -1, 0)
-                     : lsm_geom_arc_init(g, V, o, c, LSM_GEOM_PLANE_XY, turn > 0 ? 1 : -1, 0);
+    const lsm_real o[3] = {(lsm_real)(c[0] + r * cos(a1)), (lsm_real)(c[1] + r * sin(a1)), (lsm_real)V[2]};
+    const lsm_real v[3] = {(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2]};
+    const lsm_real cr[3] = {(lsm_real)c[0], (lsm_real)c[1], (lsm_real)c[2]};
+    return ends_at_v ? lsm_geom_arc_init(g, o, v, cr, LSM_GEOM_PLANE_XY, turn > 0 ? 1 : -1, 0)
+                     : lsm_geom_arc_init(g, v, o, cr, LSM_GEOM_PLANE_XY, turn > 0 ? 1 : -1, 0);
 }
 
 static void bc_make(bc_corner *k, int kind)
@@ -66,9 +68,11 @@ static void bc_make(bc_corner *k, int kind)
     if (kind == 0) {
         /* 3-D: tilt the second direction out of the plane */
         const double tz = bc_uni(-0.5, 0.5);
-        const double p0[6] = {V[0] - l1 * t1[0], V[1] - l1 * t1[1], V[2] - l1 * bc_uni(-0.5, 0.5), 0, 0, 0};
-        const double pv[6] = {V[0], V[1], V[2], 0, 0, 0};
-        const double p2[6] = {V[0] + l2 * t2[0], V[1] + l2 * t2[1], V[2] + l2 * tz, 0, 0, 0};
+        const lsm_real p0[6] = {(lsm_real)(V[0] - l1 * t1[0]), (lsm_real)(V[1] - l1 * t1[1]),
+                                (lsm_real)(V[2] - l1 * bc_uni(-0.5, 0.5)), 0, 0, 0};
+        const lsm_real pv[6] = {(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2], 0, 0, 0};
+        const lsm_real p2[6] = {(lsm_real)(V[0] + l2 * t2[0]), (lsm_real)(V[1] + l2 * t2[1]), (lsm_real)(V[2] + l2 * tz),
+                                0, 0, 0};
         lsm_geom_line_init(&k->b1, p0, pv);
         lsm_geom_line_init(&k->b2, pv, p2);
         return;
@@ -79,13 +83,16 @@ static void bc_make(bc_corner *k, int kind)
     if (kind == 2 || kind == 3)
         bc_arc(&k->b1, V, t1, r1, turn1, 1);
     else
-        lsm_geom_line_init(&k->b1, (double[6]){V[0] - l1 * t1[0], V[1] - l1 * t1[1], V[2], 0, 0, 0},
-                           (double[6]){V[0], V[1], V[2], 0, 0, 0});
+        lsm_geom_line_init(&k->b1,
+                           (lsm_real[6]){(lsm_real)(V[0] - l1 * t1[0]), (lsm_real)(V[1] - l1 * t1[1]), (lsm_real)V[2], 0,
+                                         0, 0},
+                           (lsm_real[6]){(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2], 0, 0, 0});
     if (kind == 1 || kind == 3)
         bc_arc(&k->b2, V, t2, r2, turn2, 0);
     else
-        lsm_geom_line_init(&k->b2, (double[6]){V[0], V[1], V[2], 0, 0, 0},
-                           (double[6]){V[0] + l2 * t2[0], V[1] + l2 * t2[1], V[2], 0, 0, 0});
+        lsm_geom_line_init(&k->b2, (lsm_real[6]){(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2], 0, 0, 0},
+                           (lsm_real[6]){(lsm_real)(V[0] + l2 * t2[0]), (lsm_real)(V[1] + l2 * t2[1]), (lsm_real)V[2],
+                                         0, 0, 0});
 }
 
 static double bc_now_ns(void)
@@ -185,8 +192,8 @@ int cmd_bench_clothoid(int argc, char **argv)
                 continue;
             const lsm_geom_clothoid *A = &res[i].trans[0].u.clo, *B = &res[i].trans[1].u.clo;
             const double L = res[i].trans[1].len;
-            double pe[LSM_MAX_AXES];
-            lsm_geom_eval(&res[i].trans[1], L, pe, NULL, NULL);
+            lsm_real pe[LSM_MAX_AXES];
+            lsm_geom_eval(&res[i].trans[1], (lsm_real)L, pe, NULL, NULL);
             double x1 = 0, y1 = 0;
             for (int d = 0; d < 3; d++) {
                 x1 += (pe[d] - A->origin_mm[d]) * A->e1[d];

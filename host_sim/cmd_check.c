@@ -78,7 +78,7 @@ static void json_str(FILE *f, const char *s)
     fputc('"', f);
 }
 
-static void json_vec(FILE *f, const double *v, int n)
+static void json_vec(FILE *f, const lsm_real *v, int n)
 {
     fputc('[', f);
     for (int k = 0; k < n; k++) {
@@ -154,7 +154,10 @@ static int check_text(const char *text, size_t len, const lsm_gcode_options *go,
     lsm_gcode g;
     if (lsm_gcode_init(&g, go) != LSM_OK)
         return -1;
-    if (start && lsm_gcode_set_position(&g, start) != LSM_OK)
+    lsm_real start_r[LSM_GCODE_N_AXES];
+    for (int k = 0; start && k < LSM_GCODE_N_AXES; k++)
+        start_r[k] = (lsm_real)start[k];
+    if (start && lsm_gcode_set_position(&g, start_r) != LSM_OK)
         return -1;
     bool ended = false, percent = false, homes_set[2] = {false, false};
     int ignored_first = 0;

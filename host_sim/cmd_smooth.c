@@ -123,6 +123,36 @@ static int sm_read_gcode(const char *path, sm_block **out, int *n_out)
 
 /* ---- independent deviation check (dense sampling, exact distances, double) ---- */
 
+/* lsm_geom_eval in double whatever lsm_real is (the checks here compute in double; a float core's results are
+ * widened exactly). */
+static void sm_eval(const lsm_geom *g, double s, double pos[LSM_MAX_AXES], double tan[3], double curv[3])
+{
+    lsm_real p[LSM_MAX_AXES] = {0}, t[3] = {0}, c[3] = {0};
+    lsm_geom_eval(g, (lsm_real)s, p, t, c);
+    for (int i = 0; i < LSM_MAX_AXES; i++) {
+        if (pos)
+            pos[i] = p[i];
+        if (i < 3 && tan)
+            tan[i] = t[i];
+        if (i < 3 && curv)
+            curv[i] = c[i];
+    }
+}
+
+/* The centre of an arc in double (geom.h: the float build stores the start point; its centre is computed here
+ * in double from the stored start, radius and phi0, so that distances are not limited by a float centre). */
+static void sm_arc_centre(const lsm_geom_arc *a, double c[3])
+{
+#if LSM_REAL_IS_FLOAT
+    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
+    for (int i = 0; i < 3; i++)
+        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
+#else
+    for (int i = 0; i < 3; i++)
+        c[i] = a->centre_mm[i];
+#endif
+}
+
 static double sm_dist_block(const lsm_geom *g, const double p[3])
 {
     double q[LSM_MAX_AXES];
@@ -145,9 +175,10 @@ static double sm_dist_block(const lsm_geom *g, const double p[3])
     const lsm_geom_arc *a = &g->u.arc;
     double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                    a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
-    double u = 0.0, v = 0.0, h = 0.0;
+    double u = 0.0, v = 0.0, h = 0.0, ac[3];
+    sm_arc_centre(a, ac);
     for (int i = 0; i < 3; i++) {
-        const double w = p[i] - a->centre_mm[i];
+        const double w = p[i] - ac[i];
         u += w * a->e1[i];
         v += w * a->e2[i];
         h += w * n[i];
@@ -160,7 +191,7 @@ static double sm_dist_block(const lsm_geom *g, const double p[3])
         return hypot(rho - a->radius_mm, h);
     double best = HUGE_VAL;
     for (int e = 0; e < 2; e++) {
-        lsm_geom_eval(g, e ? g->len : 0.0, q, NULL, NULL);
+        sm_eval(g, e ? g->len : 0.0, q, NULL, NULL);
         const double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
         if (d < best)
             best = d;
@@ -180,9 +211,9 @@ static double sm_f(const sm_check *c, int which, double t)
     const double L = c->r->trans[0].len;
     double p[LSM_MAX_AXES];
     if (t <= L)
-        lsm_geom_eval(&c->r->trans[0], t, p, NULL, NULL);
+        sm_eval(&c->r->trans[0], t, p, NULL, NULL);
     else
-        lsm_geom_eval(&c->r->trans[1], t - L, p, NULL, NULL);
+        sm_eval(&c->r->trans[1], t - L, p, NULL, NULL);
     if (which == 0) {
         double d2 = 0.0;
         for (int i = 0; i < 3; i++)
@@ -197,7 +228,7 @@ static double sm_sampled_deviation(const lsm_geom *b1, const lsm_geom *b2, const
 {
     sm_check c = {r, b1, b2, {0, 0, 0}};
     double pv[LSM_MAX_AXES];
-    lsm_geom_eval(b1, b1->len, pv, NULL, NULL);
+    sm_eval(b1, b1->len, pv, NULL, NULL);
     memcpy(c.v, pv, sizeof c.v);
     const int n = 2000;
     const double T = r->trans[0].len + r->trans[1].len, h = T / n;
@@ -244,8 +275,8 @@ typedef struct {
 static void sm_joint_check(const lsm_geom *a, const lsm_geom *b, sm_joint *j, uint32_t line, double scale)
 {
     double pa[LSM_MAX_AXES], pb[LSM_MAX_AXES], ta[3], tb[3], ca[3], cb[3];
-    lsm_geom_eval(a, a->len, pa, ta, ca);
-    lsm_geom_eval(b, 0.0, pb, tb, cb);
+    sm_eval(a, a->len, pa, ta, ca);
+    sm_eval(b, 0.0, pb, tb, cb);
     double g2 = 0.0, c2 = 0.0, na = 0.0, nb = 0.0, dt = 0.0;
     for (int i = 0; i < 3; i++) {
         g2 += (pa[i] - pb[i]) * (pa[i] - pb[i]);

@@ -166,7 +166,7 @@ static int32_t counts(const stream *s, int k, double v)
 }
 
 /* One 0x5010 block: a line (type 1) or an arc (2 CW, 3 CCW) ending at end[], centre[] (X Y Z) for arcs. */
-static int encode(stream *s, int type, int plane, const double *end, const double *centre, double feed_mm_s,
+static int encode(stream *s, int type, int plane, const lsm_real *end, const lsm_real *centre, double feed_mm_s,
                   double tol_mm, uint32_t line)
 {
     st_block b = {{0}, 0, line};
@@ -201,9 +201,9 @@ static int add_gcode_block(stream *s, const lsm_gcode_block *g, const lsm_gcode_
     for (uint32_t t = 1; t <= g->turns; t++) {
         /* after t full turns: the plane's point is the start again, the other axes have moved t 2 pi / angle */
         const double f = 2 * LSM_PI * t / g->angle_rad;
-        double e[ST_MAX_AXES];
+        lsm_real e[ST_MAX_AXES];
         for (int k = 0; k < ST_MAX_AXES; k++)
-            e[k] = g->start[k] + f * (g->end[k] - g->start[k]);
+            e[k] = (lsm_real)(g->start[k] + f * (g->end[k] - g->start[k]));
         static const int pa[3] = {0, 2, 1}, pb[3] = {1, 0, 2};
         e[pa[plane]] = g->start[pa[plane]];
         e[pb[plane]] = g->start[pb[plane]];
@@ -233,9 +233,9 @@ static int load_program(stream *s, const char *name, const char *text, size_t le
     lsm_gcode_default_options(&go);
     go.axis_mask = (uint8_t)((1u << s->n_axes) - 1u);
     lsm_gcode g;
-    double pos[LSM_GCODE_N_AXES] = {0};
+    lsm_real pos[LSM_GCODE_N_AXES] = {0};
     for (int k = 0; k < s->n_axes; k++)
-        pos[k] = start[k];
+        pos[k] = (lsm_real)start[k];
     if (lsm_gcode_init(&g, &go) != LSM_OK || lsm_gcode_set_position(&g, pos) != LSM_OK) {
         fprintf(stderr, "error: the axes' position is out of the parser's range\n");
         return 1;

@@ -184,7 +184,7 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
     }
     if (p->n_errors)
         return -1;
-    const double *pos = lsm_gcode_position(&g);
+    const lsm_real *pos = lsm_gcode_position(&g);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         p->end[i] = pos[i];
     /* the programmed path */
@@ -203,7 +203,7 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
         if (b->type == LSM_GCODE_BLOCK_ARC) {
             st = lsm_geom_arc_init(&gg, b->start, b->end, b->centre, (lsm_geom_plane)b->plane, b->dir, b->turns);
         } else {
-            double a[LSM_MAX_AXES], e[LSM_MAX_AXES];
+            lsm_real a[LSM_MAX_AXES], e[LSM_MAX_AXES];
             for (int k = 0; k < LSM_MAX_AXES; k++) {
                 a[k] = k < 3 ? b->start[k] : 0;
                 e[k] = k < 3 ? b->end[k] : 0;
@@ -223,11 +223,25 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
     return 0;
 }
 
+/* The centre of an arc in double (geom.h: the float build stores the start point; its centre is computed here
+ * in double from the stored start, radius and phi0, so that distances are not limited by a float centre). */
+static void sim_arc_centre(const lsm_geom_arc *a, double c[3])
+{
+#if LSM_REAL_IS_FLOAT
+    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
+    for (int i = 0; i < 3; i++)
+        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
+#else
+    for (int i = 0; i < 3; i++)
+        c[i] = a->centre_mm[i];
+#endif
+}
+
 /* Distance (X Y Z) from x to one path element. */
 static double dist_elem(const lsm_geom *g, const double x[3])
 {
     if (g->kind == LSM_GEOM_LINE) {
-        const double *p0 = g->u.line.p0, *d = g->u.line.dir;
+        const lsm_real *p0 = g->u.line.p0, *d = g->u.line.dir;
         double t = (x[0] - p0[0]) * d[0] + (x[1] - p0[1]) * d[1] + (x[2] - p0[2]) * d[2];
         if (t < 0)
             t = 0;
@@ -243,7 +257,9 @@ static double dist_elem(const lsm_geom *g, const double x[3])
     const lsm_geom_arc *a = &g->u.arc;
     double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                    a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
-    double d[3] = {x[0] - a->centre_mm[0], x[1] - a->centre_mm[1], x[2] - a->centre_mm[2]};
+    double ac[3];
+    sim_arc_centre(a, ac);
+    double d[3] = {x[0] - ac[0], x[1] - ac[1], x[2] - ac[2]};
     const double u = d[0] * a->e1[0] + d[1] * a->e1[1] + d[2] * a->e1[2];
     const double w = d[0] * a->e2[0] + d[1] * a->e2[1] + d[2] * a->e2[2];
     const double phi = atan2(w, u);
@@ -256,16 +272,16 @@ static double dist_elem(const lsm_geom *g, const double x[3])
         const double ph = a->phi0_rad + sg * t, f = t / sw;
         double q[3];
         for (int i = 0; i < 3; i++)
-            q[i] = a->centre_mm[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
+            q[i] = ac[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
         const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
         if (r < best)
             best = r;
     }
-    double e0[LSM_MAX_AXES] = {0}, e1[LSM_MAX_AXES] = {0};
+    lsm_real e0[LSM_MAX_AXES] = {0}, e1[LSM_MAX_AXES] = {0};
     lsm_geom_eval(g, 0, e0, NULL, NULL);
     lsm_geom_eval(g, g->len, e1, NULL, NULL);
     for (int k = 0; k < 2; k++) {
-        const double *q = k ? e1 : e0;
+        const lsm_real *q = k ? e1 : e0;
         const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
         if (r < best)
             best = r;
@@ -346,6 +362,9 @@ static int rec_push(rec *r, const double pos[LSM_MAX_AXES], double feed, uint32_
     return 0;
 }
 
+/* A run that neither moves nor takes a block for this long (machine time, s) has stalled. */
+#define SIM_STALL_S 10.0
+
 static lsm_status append_block(lsm_planner *pl, const pblk *q)
 {
     const lsm_gcode_block *b = &q->b;
@@ -378,7 +397,7 @@ static bool mf_at_rest(const prog *p, size_t next, const lsm_interp *ip)
 {
     if (lsm_interp_state_of(ip) != LSM_INTERP_IDLE)
         return false;
-    const double *want = next > 0 ? p->v[next - 1].b.end : p->v[0].b.start;
+    const lsm_real *want = next > 0 ? p->v[next - 1].b.end : p->v[0].b.start;
     for (int k = 0; k < LSM_MAX_AXES; k++)
         if (fabs(ip->pos[k] - want[k]) > 1e-6)
             return false;
@@ -441,7 +460,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
         snprintf(r->err, sizeof r->err, "out of memory");
         return -1;
     }
-    double start[LSM_MAX_AXES] = {0};
+    lsm_real start[LSM_MAX_AXES] = {0};
     if (p->n)
         memcpy(start, p->v[0].b.start, sizeof start);
     lsm_status st = lsm_planner_init(pl, &cfg, store, cap, start);
@@ -455,14 +474,20 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     lsm_interp_init(ip, pl);
     size_t next = 0, appended = 0;
     bool fin = false;
-    const double max_t = o->max_time_s > 0 ? o->max_time_s : 3600.0;
-    const uint64_t max_cycles = (uint64_t)(max_t / cfg.cycle_s) + 1;
+    /* no cap on machine time unless asked for (long jobs run for hours); a stall ends the run instead */
+    const double max_t = o->max_time_s;
+    const uint64_t max_cycles = max_t > 0 ? (uint64_t)(max_t / cfg.cycle_s) + 1 : UINT64_MAX;
+    const uint64_t stall_cycles = (uint64_t)(SIM_STALL_S / cfg.cycle_s) + 1;
+    uint64_t still = 0; /* cycles without progress */
+    lsm_real last_pos[LSM_MAX_AXES]; /* the setpoints' own type (float on the host-float build) */
+    memcpy(last_pos, start, sizeof last_pos);
     double t_append = 0, t_step = 0, t_prep = 0;
     size_t ev = 0;
     int rc = 0;
     uint64_t k_done = 0;
     mf_gate gate = {0};
     for (uint64_t k = 0;; k++) {
+        const size_t next_before = next;
         if (!fin) {
             const bool slow = o->feed_every > 0;
             bool wait = mf_step(p, &gate, next, pl, ip, k, cfg.cycle_s);
@@ -501,7 +526,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
             else if (e->kind == 3)
                 lsm_interp_set_override(ip, e->value);
         }
-        double pos[LSM_MAX_AXES];
+        lsm_real pos[LSM_MAX_AXES];
         const double tp = now_ns();
         (void)lsm_interp_prepare(ip); /* background planning, between cycles */
         const double t0 = now_ns();
@@ -509,7 +534,10 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
         const lsm_interp_state s = lsm_interp_step(ip, pos);
         t_step += now_ns() - t0;
         const lsm_pblock *cb = lsm_planner_block(pl, ip->blk);
-        if (rec_push(out, pos, lsm_interp_feed(ip), cb ? cb->seq : 0) != 0) {
+        double posd[LSM_MAX_AXES]; /* (a float core's setpoints, widened exactly) */
+        for (int i = 0; i < LSM_MAX_AXES; i++)
+            posd[i] = pos[i];
+        if (rec_push(out, posd, lsm_interp_feed(ip), cb ? cb->seq : 0) != 0) {
             snprintf(r->err, sizeof r->err, "out of memory");
             rc = -1;
             goto done;
@@ -519,7 +547,22 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
             break;
         }
         if (k >= max_cycles) {
-            snprintf(r->err, sizeof r->err, "run exceeded %.0f s of machine time (stuck?)", max_t);
+            snprintf(r->err, sizeof r->err, "run exceeded %.0f s of machine time (--max-time)", max_t);
+            rc = -1;
+            goto done;
+        }
+        /* progress: the setpoint moved, a block was taken, a dwell (G4) runs, or an event (a resume) is still to
+         * come */
+        const bool moved = memcmp(pos, last_pos, sizeof last_pos) != 0;
+        memcpy(last_pos, pos, sizeof last_pos);
+        still = (moved || next != next_before || k < gate.dwell_until || ev < o->n_events) ? 0 : still + 1;
+        if (still >= stall_cycles) {
+            snprintf(r->err, sizeof r->err,
+                     "stalled: no motion and no block taken for %.0f s of machine time (at %.3f s, interpolator %s, "
+                     "G-code line %u, %zu of %zu blocks taken)",
+                     SIM_STALL_S, (double)k * cfg.cycle_s,
+                     s == LSM_INTERP_IDLE ? "idle" : s == LSM_INTERP_HELD ? "held" : "running",
+                     cb ? (unsigned)cb->seq : 0u, next, p->n);
             rc = -1;
             goto done;
         }
@@ -668,18 +711,21 @@ static void gpath_exact(const gpath *gp, double s, double q[SIM_VPOP_AXES], doub
         else
             hi = mid;
     }
-    double pos[LSM_MAX_AXES];
-    pos[3] = gp->rot[3 * lo];
-    pos[4] = gp->rot[3 * lo + 1];
-    pos[5] = gp->rot[3 * lo + 2];
+    lsm_real pos[LSM_MAX_AXES];
+    pos[3] = (lsm_real)gp->rot[3 * lo];
+    pos[4] = (lsm_real)gp->rot[3 * lo + 1];
+    pos[5] = (lsm_real)gp->rot[3 * lo + 2];
     if (t == NULL && gp->tab && gp->g[lo].kind != LSM_GEOM_LINE) { /* only A B C wanted: constant there */
         for (int i = 3; i < LSM_MAX_AXES; i++)
             q[i] = pos[i];
         return;
     }
-    lsm_geom_eval(&gp->g[lo], s - gp->s0[lo], pos, t, NULL);
+    lsm_real tr[3];
+    lsm_geom_eval(&gp->g[lo], (lsm_real)(s - gp->s0[lo]), pos, t ? tr : NULL, NULL);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         q[i] = pos[i];
+    for (int i = 0; t != NULL && i < 3; i++)
+        t[i] = tr[i];
 }
 
 static double gpath_feed(void *ctx, double s)
@@ -778,7 +824,7 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
         snprintf(r->err, sizeof r->err, "out of memory");
         goto done;
     }
-    double start[LSM_MAX_AXES] = {0};
+    lsm_real start[LSM_MAX_AXES] = {0};
     if (p->n)
         memcpy(start, p->v[0].b.start, sizeof start);
     lsm_status st = lsm_planner_init(pl, &cfg, store, cap, start);
@@ -834,7 +880,7 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
                 /* and at most 0.02 rad of turning per interval (tiny, tight clothoids) */
                 double kmax = 0;
                 for (int e = 0; e <= 2; e++) {
-                    double pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0}, cv[LSM_MAX_AXES] = {0};
+                    lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0}, cv[LSM_MAX_AXES] = {0};
                     lsm_geom_eval(&gp.g[k], gp.g[k].len * 0.5 * e, pos, t, cv);
                     kmax = fmax(kmax, sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]));
                 }
@@ -848,7 +894,7 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
         if (gp.tab) {
             for (size_t k = 0; k < gp.n; k++) {
                 for (uint32_t i = 0; i <= gp.tab_m[k]; i++) {
-                    double pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0};
+                    lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0};
                     const double u = i == gp.tab_m[k] ? gp.g[k].len : gp.g[k].len * i / gp.tab_m[k];
                     lsm_geom_eval(&gp.g[k], u, pos, t, NULL);
                     double *row = gp.tab + 6 * (gp.tab_off[k] + i);

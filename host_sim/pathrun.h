@@ -47,7 +47,9 @@ typedef struct sim_run_opts {
     sim_run_planner planner;
     uint32_t capacity;         /* planner blocks; 0: max(256, 3 lookahead_blocks + 8) */
     bool drives;               /* also simulate the drives */
-    double max_time_s;         /* stop with an error if the run takes longer (0: 3600 s of machine time) */
+    double max_time_s;         /* stop with an error if the run takes longer (0: no limit; the Lissom planner's
+                                  run stops with an error when it stalls: no motion and no block taken for 10 s
+                                  while no event is pending; the VPOp reference keeps a 3600 s bound) */
     uint32_t feed_every;       /* > 0: append at most one block every this many cycles (underrun tests) */
     const sim_run_event *events;
     size_t n_events;

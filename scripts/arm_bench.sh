@@ -8,8 +8,13 @@
 # scripts/arm_report.sh formats the planner/interpolator figures of issue 7 against their goals.
 # The tables are markdown, ready for docs/cortex_m.md and the README. Exit 1 if the bench fails.
 # Environment: LSM_ARM_BUILD_DIR (default <repo>/build-arm), LSM_QEMU_TIMEOUT (s, default 60).
+# With --json, prints only one JSON object (cycle_instructions_line, _arc, _clothoid, append_instructions_mean,
+# append_instructions_max, piece_instructions_mean, piece_instructions_max, core_flash_bytes, ram_bytes_per_block;
+# scripts/arm_report.py --json) and the build and run messages go to stderr.
 set -uo pipefail
 
+JSON=0
+[ "${1:-}" = "--json" ] && JSON=1
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD=${LSM_ARM_BUILD_DIR:-$ROOT/build-arm}
 QEMU_TIMEOUT=${LSM_QEMU_TIMEOUT:-60}
@@ -29,7 +34,12 @@ timeout "$QEMU_TIMEOUT" qemu-system-arm -M mps2-an386 -cpu cortex-m4 -nographic 
     -semihosting-config enable=on,target=native -icount shift=0 -kernel "$ELF" >"$LOG" 2>&1
 rc=$?
 if [ $rc -ne 0 ] || ! grep -qx "bench PASS" "$LOG"; then
-    cat "$LOG"; echo "arm_bench: FAIL (exit status $rc)"; exit 1
+    cat "$LOG" >&2; echo "arm_bench: FAIL (exit status $rc)" >&2; exit 1
+fi
+
+if [ $JSON -eq 1 ]; then
+    python3 "$ROOT/scripts/arm_report.py" --json "$LOG" "$BUILD/bin/lissom-contour.elf.map" || exit 1
+    exit 0
 fi
 
 BUILD_TYPE=$(sed -n 's/^CMAKE_BUILD_TYPE:[A-Z]*=//p' "$BUILD/CMakeCache.txt")

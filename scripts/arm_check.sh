@@ -7,7 +7,8 @@
 #      warnings, every such routine and every double libm call the float core archive refers to;
 #   5. runs lissom-selftest.elf, lissom-contour.elf and lissom-bench.elf under qemu-system-arm -M mps2-an386
 #      -icount shift=0 with a timeout and requires exit code 0 and their PASS line; runs lissom-faulttest.elf and
-#      requires the HardFault report and exit code 99;
+#      requires the HardFault report and exit code 99; boots lissom-controller.elf for 5 s and requires its ready
+#      line (it runs until stopped; hil/run_hil_mcu.sh tests it over CAN);
 #   6. builds the host twin of the contour program (lissom-contour-host, target of the host build) and requires
 #      its report (checksum of every setpoint, end point, planner statistics, sampled setpoints) to equal the
 #      image's line for line.
@@ -20,7 +21,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD=${LSM_ARM_BUILD_DIR:-$ROOT/build-arm}
 HOST_BUILD=${LSM_BUILD_DIR:-$ROOT/build}
 QEMU_TIMEOUT=${LSM_QEMU_TIMEOUT:-60}
-IMAGES=(lissom-selftest lissom-contour lissom-bench lissom-faulttest)
+IMAGES=(lissom-selftest lissom-contour lissom-bench lissom-faulttest lissom-controller)
 FAILS=()
 fail() { echo "FAIL: $*"; FAILS+=("$1"); }
 finish() {
@@ -125,6 +126,17 @@ run_image lissom-selftest "selftest PASS"
 run_image lissom-contour "contour PASS"
 run_image lissom-bench "bench PASS"
 run_image lissom-faulttest "HardFault: pc=0x[0-9a-f]{8} .* bfar=0xf0000000" 99
+# the controller image runs until it is stopped (scripts/mcu_node.sh): it must boot and print its ready line
+# within 5 s, then it is stopped; the HIL suite (hil/run_hil_mcu.sh) tests it over CAN
+if [ -f "$BUILD/bin/lissom-controller.elf" ]; then
+    clog=$BUILD/lissom-controller.qemu.log
+    timeout 5 qemu-system-arm -M mps2-an386 -cpu cortex-m4 -nographic -monitor none -serial null \
+        -semihosting-config enable=on,target=native,arg=--node-id,arg=3 -icount shift=3,sleep=on \
+        -kernel "$BUILD/bin/lissom-controller.elf" >"$clog" 2>&1
+    sed "s/^/  [lissom-controller] /" "$clog" | grep -v "terminating on signal"
+    grep -qE "^lissom-controller: ready node=3 " "$clog" || fail "lissom-controller-no-ready-line"
+    ! grep -qE "HardFault|unexpected exception" "$clog" || fail "lissom-controller-fault"
+fi
 
 echo "== contour program: image vs host float build (same source, same float core)"
 HOST=$HOST_BUILD/bin/lissom-contour-host

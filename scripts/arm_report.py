@@ -2,6 +2,7 @@
 """Markdown report of the Cortex-M4F figures of issue 7 (planner, interpolator, memory) against their goals.
 
 usage: arm_report.py BENCH_LOG CONTOUR_LOG CONTOUR_MAP [--ramp RAMP_LOG] [--gcc VERSION] [--build-type TYPE]
+       arm_report.py --json BENCH_LOG CONTOUR_MAP     one JSON object of the issue-12 figures (scripts/arm_bench.sh)
 
 BENCH_LOG: output of lissom-bench.elf ("bench", "size", "note" lines, bench_main.c / bench_planner.c);
 CONTOUR_LOG: output of lissom-contour.elf (stack high-water mark, checksum); CONTOUR_MAP: its linker map, whose
@@ -230,5 +231,40 @@ def main(argv):
     return 0
 
 
+def json_figures(bench_log, contour_map):
+    """The issue-12 cost figures as one JSON object: per-cycle instructions (3 axes: line, arc, clothoid), per
+    appended block and per prepared piece on the dense benchmark (mean, max), core flash as linked into
+    lissom-contour.elf, RAM per look-ahead block."""
+    import json
+    try:
+        bench, size, _ = parse_bench(Path(bench_log).read_text())
+    except OSError as e:
+        print(f"arm_report: {e}", file=sys.stderr)
+        return 2
+    objs = core_objects(contour_map)
+
+    def b(name, key="value"):
+        if name not in bench or (key != "value" and key not in bench[name]):
+            raise SystemExit(f"arm_report: no figure '{name}' ({key}) in {bench_log}")
+        v = bench[name][key]
+        return round(float(v), 1)
+
+    out = {
+        "cycle_instructions_line": b("interp_line_3ax"),
+        "cycle_instructions_arc": b("interp_arc_3ax"),
+        "cycle_instructions_clothoid": b("interp_clothoid_3ax"),
+        "append_instructions_mean": b("planner_append"),
+        "append_instructions_max": b("planner_append", "max"),
+        "piece_instructions_mean": b("planner_plan_piece"),
+        "piece_instructions_max": b("planner_plan_piece", "max"),
+        "core_flash_bytes": sum(v[0] for k, v in objs.items() if k.startswith("core:")),
+        "ram_bytes_per_block": size.get("lsm_pblock"),
+    }
+    print(json.dumps(out))
+    return 0
+
+
 if __name__ == "__main__":
+    if len(sys.argv) == 4 and sys.argv[1] == "--json":
+        sys.exit(json_figures(sys.argv[2], sys.argv[3]))
     sys.exit(main(sys.argv))

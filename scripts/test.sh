@@ -4,7 +4,8 @@
 #   2. ctest: the cmocka unit tests, double and float builds (randomized tests at their CI counts)
 #   3. the Cortex-M4F cross build: -Wall -Wextra -Werror, no heap or printf linked, images run under QEMU
 #   4. pytest: the Python tests (CLI contracts, references, plots, EDS, ...)
-#   5. HIL: the CANopen node on a real vcan bus (a QEMU guest with Debian's kernel when this one has no CAN)
+#   5. HIL: the CANopen node on a real vcan bus (a QEMU guest with Debian's kernel when this one has no CAN), then
+#      the same suite against the Cortex-M4F controller image under QEMU, over slcan on TCP
 # Ends with one line "tests: N passed, N failed".
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -45,6 +46,7 @@ count_pytest() {
 
 echo "== pytest"
 export LISSOM_SIM="$PWD/build/bin/lissom-sim"
+export LISSOM_SIM_FLOAT="$PWD/build-float/bin/lissom-sim"   # tests/py/test_float_sim.py
 .venv/bin/python -m pytest -q -p no:cacheprovider tests/py 2>&1 | tee "$log"
 count_pytest "$log" "${PIPESTATUS[0]}"
 
@@ -52,6 +54,11 @@ count_pytest "$log" "${PIPESTATUS[0]}"
 # ---- QEMU guest when this kernel has no CAN (docs/hil.md); counted like pytest's.
 echo "== HIL (hil/run_hil.sh)"
 hil/run_hil.sh 2>&1 | tee "$log"
+count_pytest "$log" "${PIPESTATUS[0]}"
+# ---- HIL on the Cortex-M4F controller image: the same suite through slcan over TCP (hil/run_hil_mcu.sh, on this
+# ---- host, no VM); counted like pytest's.
+echo "== HIL on the Cortex-M4F controller image (hil/run_hil_mcu.sh)"
+hil/run_hil_mcu.sh 2>&1 | tee "$log"
 count_pytest "$log" "${PIPESTATUS[0]}"
 # ---- end of the HIL block
 rm -f "$log"

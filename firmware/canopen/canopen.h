@@ -77,6 +77,18 @@ typedef enum lsm_can_bus_event {
     LSM_CAN_BUS_RX_OVERRUN = 3      /* the port lost received frames: EMCY 0x8110 */
 } lsm_can_bus_event;
 
+/* Statistics of the port's control tick, shown read-only in object 0x5F00 (sub 1..4). The port fills them
+ * (lsm_canopen_set_tick_stats); the node only shows them, and keeps them across an NMT reset. */
+typedef struct lsm_canopen_tick_stats {
+    uint32_t ticks;             /* sub 1: control ticks since the port started */
+    uint32_t overruns;          /* sub 2: ticks that fell due while the one before still ran */
+    uint32_t worst_instr;       /* sub 3: longest tick, instructions from the timer event to the end of its work */
+    uint16_t bg_load_permille;  /* sub 4: share of the CPU the background used over the last second, per mille */
+    uint32_t late_wakes;        /* sub 5: ticks that started late because the sleeping CPU was woken late (an
+                                   emulator's host scheduling; not overruns of the tick's own work) */
+    uint32_t clock_ms;          /* sub 6: the port's clock (the now_us the node runs on) in ms, wraps */
+} lsm_canopen_tick_stats;
+
 typedef struct lsm_canopen_config {
     uint8_t node_id;                 /* 1..127 */
     uint8_t n_axes;                  /* 1..LSM_MAX_AXES */
@@ -104,6 +116,7 @@ typedef struct lsm_canopen {
     uint32_t sdo_cob_rx, sdo_cob_tx; /* 0x1200 sub 1, 2 */
     uint8_t comm_error_behaviour;    /* 0x1029 sub 1 */
     uint8_t machine_status;          /* 0x5020: bit 0 E-stop, bit 1 a monitored heartbeat lost, bit 2 bus-off */
+    lsm_canopen_tick_stats tick_stats; /* 0x5F00, written by the port */
     uint8_t n_axes;
     uint8_t node_id;
     /* modules */
@@ -112,6 +125,8 @@ typedef struct lsm_canopen {
     lsm_co_nmt nmt;
     lsm_co_emcy emcy;
     lsm_co_pdo pdo;
+    lsm_co_pdo pdo_boot;             /* the default PDOs as built at init, restored by the resets */
+    bool pdo_boot_valid;
     lsm_co_path path;
     lsm_cia402 axis[LSM_MAX_AXES];
     lsm_can_txq txq;
@@ -163,6 +178,10 @@ void lsm_canopen_estop(lsm_canopen *node, bool active, uint32_t now_us);
 /* An application fault on axis k (drive error, limit switch, ...): fault reaction with `code` in 0x603F
  * and its EMCY. Errors: LSM_E_NULL, LSM_E_ARG (k). The node's context. */
 lsm_status lsm_canopen_axis_fault(lsm_canopen *node, size_t k, uint16_t code);
+
+/* Stores the port's tick statistics for object 0x5F00 (a port without them leaves it at 0). Context: the one that
+ * calls the node. */
+void lsm_canopen_set_tick_stats(lsm_canopen *node, const lsm_canopen_tick_stats *stats);
 
 /* Accessors. lsm_canopen_axis returns NULL for k >= n_axes. The node's context. */
 lsm_cia402 *lsm_canopen_axis(lsm_canopen *node, size_t k);

@@ -40,10 +40,10 @@ static int instance_of(const lsm_co_od *od, const lsm_co_od_entry *e, uint16_t i
     if (index < e->index)
         return -1;
     uint32_t d = (uint32_t)index - e->index;
-    if (d % g->index_step != 0u)
+    if (d > (uint32_t)g->index_step * (g->count - 1u)) /* beyond the last instance: no division needed */
         return -1;
     uint32_t k = d / g->index_step;
-    return k < g->count ? (int)k : -1;
+    return k * g->index_step == d ? (int)k : -1;
 }
 
 static uint16_t count_of(const lsm_co_od *od, const lsm_co_od_entry *e)
@@ -172,20 +172,23 @@ static void make_ref(const lsm_co_od *od, const lsm_co_od_entry *e, uint16_t ins
 
 uint32_t lsm_co_od_find(const lsm_co_od *od, uint16_t index, uint8_t sub, lsm_co_od_ref *ref)
 {
-    bool index_seen = false;
+    /* the sub-index first (a byte compare), the index (a division for instance groups) only where it matches:
+     * PDO mapping looks up every mapped object, and a node reset maps the default PDOs again */
     for (size_t i = 0; i < od->cfg.n_entries; i++) {
         const lsm_co_od_entry *e = &od->cfg.table[i];
+        if (e->sub != sub)
+            continue;
         int k = instance_of(od, e, index);
         if (k < 0)
             continue;
-        if (e->sub != sub) {
-            index_seen = true;
-            continue;
-        }
         make_ref(od, e, (uint16_t)k, ref);
         return LSM_CO_ABORT_NONE;
     }
-    return index_seen ? LSM_CO_ABORT_NO_SUB : LSM_CO_ABORT_NO_OBJECT;
+    for (size_t i = 0; i < od->cfg.n_entries; i++) { /* not found: is it the sub-index or the object? */
+        if (instance_of(od, &od->cfg.table[i], index) >= 0)
+            return LSM_CO_ABORT_NO_SUB;
+    }
+    return LSM_CO_ABORT_NO_OBJECT;
 }
 
 uint32_t lsm_co_od_ref_at(const lsm_co_od *od, size_t entry, uint8_t inst, lsm_co_od_ref *ref)

@@ -565,7 +565,7 @@ static lsm_status cn_check_block(const lsm_geom *g)
 {
     if (g->kind != LSM_GEOM_LINE && g->kind != LSM_GEOM_ARC)
         return LSM_E_ARG;
-    const lsm_real *v = g->kind == LSM_GEOM_LINE ? g->u.line.p0 : g->u.arc.centre_mm;
+    const lsm_real *v = g->kind == LSM_GEOM_LINE ? g->u.line.p0 : (const lsm_real *)&g->u.arc; /* 13 reals */
     const int n = g->kind == LSM_GEOM_LINE ? 2 * LSM_MAX_AXES : 13;
     /* 0 * x is NaN for NaN and +-inf, 0 otherwise: one test for all, then classify if needed */
     lsm_real z = LSM_R(0.0);

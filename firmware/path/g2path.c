@@ -71,7 +71,9 @@ static void gp_elem_make(const gp_plane *pl, const lsm_geom *g, gp_elem2d *e)
     if (!e->arc)
         return;
     const lsm_geom_arc *a = &g->u.arc;
-    gp_proj(pl, a->centre_mm, &e->cx, &e->cy);
+    lsm_real centre[3];
+    lsm_geom_arc_centre(g, centre);
+    gp_proj(pl, centre, &e->cx, &e->cy);
     e->r = a->radius_mm;
     lsm_real mx, my;
     gp_point(pl, g, LSM_R(0.5) * g->len, &mx, &my);

@@ -94,6 +94,61 @@ static lsm_real geom_wrap_2pi(lsm_real a) /* to [0, 2 pi) */
     return a;
 }
 
+/* May the centre move by t along the chord (rounded I J K, geom.h)? The points of the arc then move by about
+ * |t| sin(half the sweep) <= |t| chord / (2 r) (minor arcs): the float build bounds that by the tolerance (a float
+ * centre of a large radius is off by ulp(r), so t reaches millimetres while the path moves by a fraction of a
+ * micrometre); the double build bounds t itself. */
+static bool geom_shift_ok(lsm_real t, lsm_real chord, lsm_real r)
+{
+#if LSM_REAL_IS_FLOAT
+    const lsm_real f = chord < LSM_R(2.0) * r ? chord / (LSM_R(2.0) * r) : LSM_R(1.0);
+    return lsm_fabs(t) * f <= (lsm_real)LSM_GEOM_ARC_TOL_MM && lsm_fabs(t) <= LSM_R(0.5) * r;
+#else
+    (void)chord;
+    (void)r;
+    return lsm_fabs(t) <= (lsm_real)LSM_GEOM_ARC_TOL_MM;
+#endif
+}
+
+#if LSM_REAL_IS_FLOAT
+/* Float: end and start are the same point in the plane, to the rounding of their coordinates (a full circle). Not
+ * 16 eps r, as in double: at R 6e4 that is 0.1 mm, and a programmed chord of 0.1 mm would turn a full circle. */
+static bool geom_same_point(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3], const lsm_real e2[3])
+{
+    const lsm_real su = dot3(start, e1), sv = dot3(start, e2), eu = dot3(end, e1), ev = dot3(end, e2);
+    const lsm_real sc = lsm_fabs(su) + lsm_fabs(sv) + lsm_fabs(eu) + lsm_fabs(ev);
+    return lsm_fabs(eu - su) + lsm_fabs(ev - sv) <= LSM_R(4.0) * LSM_REAL_EPS * sc;
+}
+
+/* Float: the circle through start and end whose centre is the point of the chord's bisector nearest the
+ * programmed centre, from the chord d = end - start and the programmed centre's offsets along d and across it,
+ *     h = (u1 dv - v1 du) / |d|   (its distance from the chord, > 0 on the left of d),
+ *     r = |d/2 + h n|,  phi0 = angle of the start seen from that centre,  sweep = 2 atan2(|d| / 2, dir h),
+ * with n the left normal of d. Every quantity is a product of the chord's size and the radius: no r1² - r2², no
+ * difference of two end angles, which in float carry ulp(r) / |d| of noise (a 0.2 mm centre shift and a 5e-4 rad
+ * turn of the arc at R 400 over a 0.05 mm chord). False (and nothing set) when the end is the start (a full
+ * circle) or the centre would move too far (geom_shift_ok): the programmed centre is kept. */
+static bool geom_arc_bisector(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3],
+                              const lsm_real e2[3], lsm_real u1, lsm_real v1, lsm_real r1, int dir, lsm_real *r,
+                              lsm_real *phi0, lsm_real *sweep)
+{
+    const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
+    const lsm_real du = dot3(d, e1), dv = dot3(d, e2);
+    const lsm_real c = lsm_sqrt(du * du + dv * dv);
+    if (geom_same_point(start, end, e1, e2))
+        return false;
+    const lsm_real h = (u1 * dv - v1 * du) / c;
+    const lsm_real t = -((u1 + LSM_R(0.5) * du) * du + (v1 + LSM_R(0.5) * dv) * dv) / c; /* the move along d */
+    if (!geom_shift_ok(t, c, r1))
+        return false;
+    const lsm_real cu = LSM_R(0.5) * du - h * dv / c, cv = LSM_R(0.5) * dv + h * du / c; /* centre - start */
+    *r = lsm_sqrt(cu * cu + cv * cv);
+    *phi0 = lsm_atan2(-cv, -cu);
+    *sweep = LSM_R(2.0) * lsm_atan2(LSM_R(0.5) * c, dir > 0 ? h : -h);
+    return true;
+}
+#endif
+
 static void geom_arc_len(lsm_geom *g)
 {
     const lsm_real a = g->u.arc.radius_mm * g->u.arc.sweep_rad, b = g->u.arc.axial_mm;
@@ -133,12 +188,15 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
      * the programmed end. Only while that shift stays within the radius tolerance (a nearly closed arc with
      * a short chord keeps the programmed centre, and its end is off by at most |r1 - r2|). */
     lsm_real cshift[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+#if LSM_REAL_IS_FLOAT
+    const lsm_real ds_u = u1, ds_v = v1, r1_prog = r1; /* the programmed centre (geom_arc_bisector) */
+#endif
     {
         const lsm_real du = u2 - u1, dv = v2 - v1;
         const lsm_real chord = lsm_sqrt(du * du + dv * dv);
         if (r1 != r2 && chord > LSM_R(16.0) * LSM_REAL_EPS * r1) {
             const lsm_real t = (r2 - r1) * (r2 + r1) / (LSM_R(2.0) * chord);
-            if (lsm_fabs(t) <= (lsm_real)LSM_GEOM_ARC_TOL_MM) {
+            if (geom_shift_ok(t, chord, r1)) {
                 const lsm_real su = t * du / chord, sv = t * dv / chord;
                 u1 -= su, v1 -= sv, u2 -= su, v2 -= sv;
                 for (int i = 0; i < 3; i++)
@@ -148,13 +206,22 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
             }
         }
     }
-    const lsm_real phi0 = lsm_atan2(v1, u1);
+    lsm_real phi0 = lsm_atan2(v1, u1);
     const lsm_real phi1 = lsm_atan2(v2, u2);
     lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
+#if LSM_REAL_IS_FLOAT
+    (void)geom_arc_bisector(start, end, e1, e2, ds_u, ds_v, r1_prog, dir, &r1, &phi0, &sweep);
+#endif
     /* end == start (to rounding) is a full circle */
     const lsm_real cu = u2 - u1, cv = v2 - v1;
+#if LSM_REAL_IS_FLOAT
+    (void)cu, (void)cv;
+    if (sweep == LSM_R(0.0) || geom_same_point(start, end, e1, e2))
+        sweep = (lsm_real)(2.0 * LSM_PI);
+#else
     if (sweep == LSM_R(0.0) || lsm_sqrt(cu * cu + cv * cv) <= LSM_R(16.0) * LSM_REAL_EPS * r1)
         sweep = (lsm_real)(2.0 * LSM_PI);
+#endif
     sweep += (lsm_real)(2.0 * LSM_PI) * (lsm_real)turns;
     g->kind = LSM_GEOM_ARC;
     g->plane = (uint8_t)plane;
@@ -162,7 +229,13 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->reserved = 0;
     const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
+#if LSM_REAL_IS_FLOAT
+        g->u.arc.start_mm[i] = start[i];
+        (void)cshift;
+        (void)ns;
+#else
         g->u.arc.centre_mm[i] = centre[i] + cshift[i] + ns * n[i];
+#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -200,8 +273,16 @@ lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], cons
     g->plane = LSM_GEOM_PLANE_GENERAL;
     g->rotary_only = 0;
     g->reserved = 0;
+#if LSM_REAL_IS_FLOAT
+    lsm_real sp, cp;
+    lsm_sincos(phi0_rad, &sp, &cp);
+#endif
     for (int i = 0; i < 3; i++) {
+#if LSM_REAL_IS_FLOAT
+        g->u.arc.start_mm[i] = centre[i] + radius_mm * (cp * e1[i] + sp * e2[i]);
+#else
         g->u.arc.centre_mm[i] = centre[i];
+#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -252,6 +333,36 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
 
 static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3]) { cross3(a->e1, a->e2, n); }
 
+#if LSM_REAL_IS_FLOAT
+/* The in-plane chord from the start to the angle phi0 + dphi: 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 +
+ * cos(phi0 + dphi/2) e2), to a few ulp of its length. */
+static void geom_arc_chord(const lsm_geom_arc *a, lsm_real dphi, lsm_real c[3])
+{
+    const lsm_real h = LSM_R(0.5) * dphi;
+    lsm_real sh, ch, sm, cm;
+    lsm_sincos(h, &sh, &ch);
+    lsm_sincos(a->phi0_rad + h, &sm, &cm);
+    const lsm_real k = LSM_R(2.0) * a->radius_mm * sh;
+    for (int i = 0; i < 3; i++)
+        c[i] = k * (cm * a->e2[i] - sm * a->e1[i]);
+    (void)ch;
+}
+#endif
+
+void lsm_geom_arc_centre(const lsm_geom *g, lsm_real c[3])
+{
+    const lsm_geom_arc *a = &g->u.arc;
+#if LSM_REAL_IS_FLOAT
+    lsm_real sp, cp;
+    lsm_sincos(a->phi0_rad, &sp, &cp);
+    for (int i = 0; i < 3; i++)
+        c[i] = a->start_mm[i] - a->radius_mm * (cp * a->e1[i] + sp * a->e2[i]);
+#else
+    for (int i = 0; i < 3; i++)
+        c[i] = a->centre_mm[i];
+#endif
+}
+
 lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXES], lsm_real tan[3], lsm_real curv[3])
 {
     if (g == NULL)
@@ -280,14 +391,30 @@ lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXE
         const lsm_geom_arc *a = &g->u.arc;
         const lsm_real f = s / g->len;
         const lsm_real phi = a->phi0_rad + a->sweep_rad * f;
+#if LSM_REAL_IS_FLOAT
+        lsm_real co = LSM_R(0.0), si = LSM_R(0.0);
+        if (tan || curv) /* (the position comes from the chord) */
+            lsm_sincos(phi, &si, &co);
+#else
         const lsm_real co = lsm_cos(phi), si = lsm_sin(phi);
+#endif
         lsm_real n[3];
         geom_arc_normal(a, n);
         const lsm_real w = a->sweep_rad / g->len; /* dphi/ds */
+#if LSM_REAL_IS_FLOAT
+        lsm_real chord[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+        if (pos)
+            geom_arc_chord(a, a->sweep_rad * f, chord);
+#endif
         for (int i = 0; i < 3; i++) {
             const lsm_real radial = co * a->e1[i] + si * a->e2[i];
+#if LSM_REAL_IS_FLOAT
+            if (pos)
+                pos[i] = a->start_mm[i] + chord[i] + n[i] * a->axial_mm * f;
+#else
             if (pos)
                 pos[i] = a->centre_mm[i] + a->radius_mm * radial + n[i] * a->axial_mm * f;
+#endif
             if (tan)
                 tan[i] = w * a->radius_mm * (-si * a->e1[i] + co * a->e2[i]) + n[i] * a->axial_mm / g->len;
             if (curv)
@@ -372,8 +499,15 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
         const lsm_real f = d / g->len;
         lsm_real n[3];
         geom_arc_normal(a, n);
+#if LSM_REAL_IS_FLOAT
+        lsm_real p[LSM_MAX_AXES];
+        (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
+        for (int i = 0; i < 3; i++)
+            a->start_mm[i] = p[i];
+#else
         for (int i = 0; i < 3; i++)
             a->centre_mm[i] += n[i] * a->axial_mm * f;
+#endif
         a->phi0_rad += a->sweep_rad * f;
         a->sweep_rad -= a->sweep_rad * f;
         a->axial_mm -= a->axial_mm * f;

@@ -13,6 +13,15 @@
  *        phi(s) = phi0 + sweep s / len,  p(s) = c + r (cos phi e1 + sin phi e2) + n axial s / len,
  *        len = sqrt((r sweep)^2 + axial^2),  kappa = r sweep^2 / len^2 (= 1/r when axial = 0).
  *    G17: (e1, e2) = (X, Y); G18: (Z, X); G19: (Y, Z), as in RS274/NGC; G3 is counter-clockwise.
+ *    Float build: the arc keeps its start point p0 (exactly the programmed start) instead of its centre, and
+ *    is evaluated from it by the chord to phi (no cancellation, whatever the radius):
+ *        p(s) = p0 + 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 + cos(phi0 + dphi/2) e2) + n axial s / len,
+ *        dphi = sweep s / len,
+ *    and its sweep comes from the chord d and the cross product X = (p0 - c) x d in the plane,
+ *    sweep = 2 atan2(|d|²/2, +-X) (no difference of two angles). A float centre is off by ulp(r) (5e-4 mm at
+ *    R = 1e4) and c + r u(phi) carries that much noise into every setpoint; from p0 the error is a few ulp of
+ *    the coordinates and of the chord. The double build keeps the centre (ulp(r) is 2e-12 mm at R = 1e4), and
+ *    with it its results bit for bit. lsm_geom_arc_centre gives the centre in both builds.
  *  - Clothoid: a planar clothoid (clothoid.h, paper eqs 1, 2, 11, 12) drawn in the plane through
  *    `origin` spanned by (e1, e2): p(s) = origin + e1 X(s) + e2 Y(s), with X + iY =
  *    int_0^s e^{i(theta0 + kappa0 t + c t^2/2)} dt; kappa(s) = kappa0 + c s (signed about n).
@@ -53,7 +62,11 @@ typedef struct lsm_geom_line {
 } lsm_geom_line;
 
 typedef struct lsm_geom_arc {
+#if LSM_REAL_IS_FLOAT
+    lsm_real start_mm[3];       /* the start point (exactly the programmed start of a G2/G3) */
+#else
     lsm_real centre_mm[3];      /* its coordinate along n is the start point's */
+#endif
     lsm_real e1[3], e2[3];      /* orthonormal plane basis */
     lsm_real radius_mm;
     lsm_real phi0_rad;          /* start angle */
@@ -115,6 +128,10 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
  * tan, curv may be NULL. pos holds LSM_MAX_AXES values; arcs and clothoids write only pos[0..2].
  * A rotary-only line reports a zero tangent. Errors: LSM_E_NULL (g), LSM_E_NAN (s). */
 lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXES], lsm_real tan[3], lsm_real curv[3]);
+
+/* The centre of an arc (its coordinate along n is the start point's): stored in the double build, derived from
+ * the start point in the float build (to about r ulp(phi0) there). */
+void lsm_geom_arc_centre(const lsm_geom *g, lsm_real c[3]);
 
 /* Curvature magnitude at s (1/mm). */
 lsm_real lsm_geom_kappa(const lsm_geom *g, lsm_real s);

@@ -9,6 +9,12 @@
 #define R0 LSM_R(0.0)
 #define R1 LSM_R(1.0)
 #define ARC_ANCHOR_CYCLES 256u
+#if LSM_REAL_IS_FLOAT
+#define PATH_DS(ip, ds) ((ds) * (ip)->ds_scale) /* interp.h: the piece's phases scaled to its length */
+#else
+#define PATH_DS(ip, ds) (ds)
+#endif
+#define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
 #define CUR(ip) ((ip)->pcs[(ip)->cur])
@@ -24,6 +30,7 @@ static const lsm_pblock *bk(const lsm_interp *ip, uint32_t id)
     return lsm_planner_block(ip->pl, id);
 }
 
+#if !LSM_REAL_IS_FLOAT
 /* sin and cos of a small angle (|x| <= 0.5: Taylor to x^13, error below 3e-17); larger angles use libm. */
 static void sincos_small(lsm_real x, lsm_real *s, lsm_real *c)
 {
@@ -44,10 +51,75 @@ static void sincos_small(lsm_real x, lsm_real *s, lsm_real *c)
                                       (R1 - x2 * (R1 / LSM_R(56.0)) *
                                                 (R1 - x2 * (R1 / LSM_R(90.0)) * (R1 - x2 * (R1 / LSM_R(132.0)))))));
 }
+#endif
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* geometry of the current block                                                                               */
 
+#if LSM_REAL_IS_FLOAT
+/* sin x and cos x - 1 of a small angle (|x| <= ARC_ANCHOR_RAD: Taylor to x^9 / x^10, error below 1e-9, under
+ * float's rounding); cos x - 1 directly, without the cancellation of cos x - 1. */
+static void sincos_m1_small(lsm_real x, lsm_real *s, lsm_real *cm1)
+{
+    const lsm_real x2 = x * x;
+    *s = x * (R1 - x2 * (R1 / LSM_R(6.0)) * (R1 - x2 * (R1 / LSM_R(20.0)) *
+                                                    (R1 - x2 * (R1 / LSM_R(42.0)) * (R1 - x2 * (R1 / LSM_R(72.0))))));
+    *cm1 = -x2 * LSM_R(0.5) *
+           (R1 - x2 * (R1 / LSM_R(12.0)) * (R1 - x2 * (R1 / LSM_R(30.0)) * (R1 - x2 * (R1 / LSM_R(56.0)) *
+                                                                               (R1 - x2 * (R1 / LSM_R(90.0))))));
+}
+
+/* The exact end of block id: where the next one starts (the end of the buffer for the last). */
+static void block_end(const lsm_interp *ip, uint32_t id, lsm_real e[3])
+{
+    const lsm_pblock *n = id + 1u != ip->pl->tail ? bk(ip, id + 1u) : NULL;
+    for (int i = 0; i < 3; i++) {
+        if (n == NULL)
+            e[i] = ip->pl->tail_pos[i];
+        else if (n->g.kind == LSM_GEOM_LINE)
+            e[i] = n->g.u.line.p0[i];
+        else if (n->g.kind == LSM_GEOM_ARC)
+            e[i] = n->g.u.arc.start_mm[i];
+        else
+            e[i] = n->g.u.clo.origin_mm[i];
+    }
+}
+
+/* Sets the float arc anchor at the cursor (interp.h); the end correction is computed afresh on a block's entry and
+ * when its length changed (a trim), else kept from the previous anchor. */
+static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
+{
+    const lsm_geom_arc *a = &g->u.arc;
+    const lsm_real n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
+                           a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
+    lsm_real c[3];
+    if (ip->anchor == 0u || g->len != ip->a_len) {
+        lsm_real pe[LSM_MAX_AXES], e[3];
+        (void)lsm_geom_eval(g, g->len, pe, NULL, NULL);
+        block_end(ip, ip->blk, e);
+        for (int i = 0; i < 3; i++)
+            c[i] = (e[i] - pe[i]) / g->len;
+    } else {
+        for (int i = 0; i < 3; i++)
+            c[i] = ip->a_L[i] - n[i] * (a->axial_mm / g->len);
+    }
+    ip->aw = a->sweep_rad / g->len;
+    ip->anchor = 0;
+    ip->a_len = g->len;
+    ip->a_off = ip->off_mm;
+    lsm_real p[LSM_MAX_AXES];
+    (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
+    lsm_real sp, cp;
+    lsm_sincos(a->phi0_rad + ip->aw * ip->a_off, &sp, &cp);
+    for (int i = 0; i < 3; i++) {
+        const lsm_real corr = c[i];
+        ip->a_p[i] = p[i] + corr * ip->a_off;
+        ip->a_A[i] = a->radius_mm * (cp * a->e1[i] + sp * a->e2[i]);
+        ip->a_B[i] = a->radius_mm * (cp * a->e2[i] - sp * a->e1[i]);
+        ip->a_L[i] = n[i] * (a->axial_mm / g->len) + corr;
+    }
+}
+#else
 static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
 {
     const lsm_geom_arc *a = &g->u.arc;
@@ -57,6 +129,7 @@ static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
     ip->as = lsm_sin(phi);
     ip->anchor = 0;
 }
+#endif
 
 static void activate(lsm_interp *ip)
 {
@@ -68,6 +141,7 @@ static void activate(lsm_interp *ip)
     const lsm_geom *g = &b->g;
     ip->gkind = g->kind;
     if (g->kind == LSM_GEOM_ARC) {
+        ip->anchor = 0; /* a block entry: its end correction afresh */
         arc_anchor(ip, g);
     } else if (g->kind == LSM_GEOM_CLOTHOID) {
         lsm_clothoid seg;
@@ -92,12 +166,20 @@ static void eval_pos(lsm_interp *ip)
         for (int i = 0; i < LSM_MAX_AXES; i++)
             ip->pos[i] = g->u.line.p0[i] + g->u.line.dir[i] * ip->off_mm;
     } else if (g->kind == LSM_GEOM_ARC) {
+#if LSM_REAL_IS_FLOAT
+        const lsm_real ds = ip->off_mm - ip->a_off;
+        lsm_real sn, cm1;
+        sincos_m1_small(ip->aw * ds, &sn, &cm1);
+        for (int i = 0; i < 3; i++)
+            ip->pos[i] = ip->a_p[i] + (cm1 * ip->a_A[i] + sn * ip->a_B[i] + ds * ip->a_L[i]);
+#else
         const lsm_geom_arc *a = &g->u.arc;
         const lsm_real n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                                a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
         const lsm_real h = a->axial_mm * (ip->off_mm / g->len);
         for (int i = 0; i < 3; i++)
             ip->pos[i] = a->centre_mm[i] + a->radius_mm * (ip->ac * a->e1[i] + ip->as * a->e2[i]) + n[i] * h;
+#endif
     } else {
         const lsm_geom_clothoid *c = &g->u.clo;
         for (int i = 0; i < 3; i++)
@@ -116,7 +198,15 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         return;
     if (!ip->act_ok || ip->act_blk != ip->blk)
         activate(ip); /* (re)started on a block that was never set up */
+#if LSM_REAL_IS_FLOAT
+    {
+        const lsm_real y = ds + ip->off_lo_mm, t = ip->off_mm + y;
+        ip->off_lo_mm = y - (t - ip->off_mm); /* exact when |off| >= |y| (Fast2Sum), and when off is 0 */
+        ip->off_mm = t;
+    }
+#else
     ip->off_mm += ds;
+#endif
     bool moved = false;
     while (ip->off_mm > b->g.len && ip->blk + 1u != pl->tail) {
         ip->off_mm -= b->g.len;
@@ -124,12 +214,21 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         b = bk(ip, ip->blk);
         moved = true;
     }
-    if (ip->off_mm > b->g.len)
+    if (ip->off_mm > b->g.len) {
         ip->off_mm = b->g.len;
+        ip->off_lo_mm = R0;
+    }
     if (moved) {
         lsm_planner_post_release(ip->pl, ip->blk);
         activate(ip);
     } else if (ip->gkind == LSM_GEOM_ARC && ds > R0) {
+#if LSM_REAL_IS_FLOAT
+        /* re-anchored every ARC_ANCHOR_CYCLES, before the angle leaves the polynomials' range, and when a corner
+         * trimmed the block's end (its exact end moved) */
+        if (++ip->anchor >= ARC_ANCHOR_CYCLES || lsm_fabs(ip->aw * (ip->off_mm - ip->a_off)) > ARC_ANCHOR_RAD ||
+            b->g.len != ip->a_len)
+            arc_anchor(ip, &b->g);
+#else
         if (++ip->anchor >= ARC_ANCHOR_CYCLES) {
             arc_anchor(ip, &b->g);
         } else {
@@ -141,6 +240,7 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
             ip->ac = nc * k;
             ip->as = ns * k;
         }
+#endif
     } else if (ip->gkind == LSM_GEOM_CLOTHOID && ds > R0) {
         (void)lsm_clothoid_step(&ip->cs, ds, NULL);
     }
@@ -152,6 +252,7 @@ static void place(lsm_interp *ip, uint32_t id, lsm_real off)
 {
     ip->blk = id;
     ip->off_mm = off;
+    ip->off_lo_mm = R0;
     lsm_planner_post_release(ip->pl, id);
     activate(ip);
     eval_pos(ip);
@@ -194,6 +295,12 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
     ip->phase = 0;
+#if LSM_REAL_IS_FLOAT
+    {
+        const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm;
+        ip->ds_scale = sum > pc->len_mm && pc->len_mm > R0 ? pc->len_mm / sum : R1;
+    }
+#endif
     ip->tau = R0;
     ip->sloc = R0;
     ip->rc = R1;
@@ -589,6 +696,7 @@ static void end_piece(lsm_interp *ip)
             const lsm_pblock *b = bk(ip, pl->tail - 1u);
             ip->blk = pl->tail - 1u;
             ip->off_mm = b ? b->g.len : R0;
+            ip->off_lo_mm = R0;
             lsm_planner_post_release(pl, ip->blk);
             activate(ip);
             if (CUR(ip).stop) {
@@ -636,21 +744,21 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 w.off = ip->hz_off;
                 w.v = ip->hz_v;
             } else { /* the start of a ramp: ds beyond the last sample */
-                ahead(ip, ds > R0 ? ds : R0, &w.blk, &w.off);
+                ahead(ip, ds > R0 ? PATH_DS(ip, ds) : R0, &w.blk, &w.off);
                 w.v = CUR(ip).st[ip->phase].v_mm_s;
             }
             const lsm_interp_prep *q = replacement_for(ip, &w);
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
-                advance_path(ip, ds);
+                advance_path(ip, PATH_DS(ip, ds));
                 ip->gen = ip->pl->gen; /* once per boundary: the current piece stays valid if none was found */
             }
             adv = left;
             continue;
         }
         if (!ended) {
-            advance_path(ip, ds);
+            advance_path(ip, PATH_DS(ip, ds));
             if (is_ramp_phase(ip->phase))
                 lsm_planner_post_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
             else
@@ -690,6 +798,7 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl)
     ip->blk = pl->head;
     ip->off_mm = R0;
     ip->ovr = R1;
+    ip->ds_scale = R1;
     for (int i = 0; i < LSM_MAX_AXES; i++)
         ip->pos[i] = pl->tail_pos[i];
     if (pl->tail != pl->head) {
@@ -721,6 +830,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             if (id_lt_pub(ip->blk, pl->head)) {
                 ip->blk = pl->head;
                 ip->off_mm = R0;
+                ip->off_lo_mm = R0;
                 activate(ip);
             }
             swpt w;

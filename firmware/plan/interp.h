@@ -16,6 +16,20 @@
  *   2. moves the path cursor (block, offset) by ds and evaluates the block there: a line directly (p0 + dir s),
  *      an arc by rotating (cos phi, sin phi) by w ds with a short polynomial (re-anchored on entry and every 256
  *      cycles), a clothoid with the incremental stepper of clothoid.h (lsm_clothoid_step).
+ *      Float build (the Cortex-M4F): an arc is evaluated from an anchor point P_a on it (exact: lsm_geom_eval from
+ *      the arc's start point, geom.h) by its chord to the cursor, with d = w (s - s_a),
+ *        p = P_a + (cos d - 1) A + sin d B + L (s - s_a),   A = r u(phi_a), B = r u'(phi_a),
+ *      (cos d - 1 and sin d by short polynomials, no cancellation), so a setpoint is off by a few ulp of the
+ *      coordinates, whatever the radius (c + r u(phi) with a float centre c is off by ulp(r): 5e-4 mm at
+ *      R = 1e4). L = n axial / len + (E - p(len)) / len: E is the exact end of the block (the next block's start,
+ *      or the end of the buffer), so the setpoints reach it exactly, however the arc's float parameters rounded;
+ *      the linear term spreads that rounding (a few ulp) over the arc instead of a step at its end.
+ * Float build: the cursor adds ds with a compensated (Kahan) sum, so over a piece of N cycles it stays within an ulp
+ * of the sum of the travel instead of drifting by up to N/2 ulp (the drift came back as a step where the cursor is
+ * put exactly on the piece's end).
+ * The phases of a piece can add up to a little more than the piece (a ramp's float rounding where no cruise is left to
+ * absorb it: up to ~1e-5 of it); the float build scales the travel by len / sum, so that the cursor arrives exactly at
+ * the piece's end (a factor 1 - 1e-5 on v, a and j, instead of a step where the cursor is put on the end).
  * When a piece ends between two samples, the next one is planned at once and sampled at the rest of the cycle.
  * Replanning happens only where a = 0: at samples in cruises and at ramp starts, and exactly at the end of a
  * ramp (between two samples: the new piece is sampled at the rest of the cycle). There the interpolator takes a
@@ -123,10 +137,16 @@ typedef struct lsm_interp {
     uint8_t reserved[3];
     uint32_t blk;                /* path cursor: block id ... */
     lsm_real off_mm;             /* ... and offset in it */
+    lsm_real ds_scale;           /* float: the piece's length over the sum of its phases (ds is scaled by it) */
+    lsm_real off_lo_mm;          /* float: what the additions to off_mm rounded off (compensated sum: the cursor
+                                    keeps the exact sum of the travel, no drift to snap back at a piece's end) */
     uint32_t hz_blk;             /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
     lsm_real hz_v;               /* speed there (a = 0) */
     lsm_real ac, as, aw;         /* arc: cos phi, sin phi, dphi/ds */
+    lsm_real a_p[3], a_A[3], a_B[3], a_L[3]; /* float arc anchor: P_a, A, B, L (above) */
+    lsm_real a_off;              /* float arc anchor: its offset s_a in the block */
+    lsm_real a_len;              /* float arc: the block's length when the anchor was set (a trim re-anchors) */
     lsm_clothoid_stepper cs;     /* clothoid stepper */
     lsm_real pos[LSM_MAX_AXES];  /* last setpoint */
     lsm_real ovr;                /* requested override factor */

@@ -157,6 +157,7 @@ typedef struct vstate {
     uint8_t has_last;
     lsm_real last_c;
     uint32_t last_id;
+    lsm_real lo;      /* lowest cap since the last node */
 } vstate;
 
 static void vreset(vstate *s)
@@ -168,12 +169,16 @@ static void vreset(vstate *s)
     s->has_last = 0;
     s->last_c = R0;
     s->last_id = 0;
+    s->lo = LSM_REAL_MAX;
 }
 
 /* Feeds block id (cap c); returns 1 and *node when a node is found (at an id after `id`). */
 static int vstep(vstate *s, uint32_t id, lsm_real c, lsm_real h, lsm_real drop, uint32_t *node)
 {
-    if (s->has_last && s->last_c < c * (R1 - drop)) {
+    /* a drop: some cap after this block (since the last node) is that much lower, the node right after it. (Not
+     * only the next block's: a feed that falls by steps of less than node_drop each made one piece of the whole
+     * descent, whose one cruise ran at the lowest cap: F3000, 2400, 1920, ... crawled at the last feed.) */
+    if (s->has_last && s->lo < c * (R1 - drop)) {
         *node = s->last_id;
         return 1;
     }
@@ -197,6 +202,7 @@ static int vstep(vstate *s, uint32_t id, lsm_real c, lsm_real h, lsm_real drop, 
     s->has_last = 1;
     s->last_c = c;
     s->last_id = id;
+    s->lo = lsm_min2(s->lo, c);
     return 0;
 }
 
@@ -256,9 +262,13 @@ void lsm_pl_backward_pass(lsm_planner *pl)
         uint32_t node = 0;
         int found = 0;
         if (b->flags & LSM_PB_STOP) {
-            /* pending valley between here and the next node first */
+            /* pending valley between here and the next node first; then a drop of the cap right after this block
+             * (a fast block from a stop followed by a slow one: without that node, one piece from the stop ran the
+             * fast block at the slow block's cap, one cruise for both); then the stop itself */
             if (vs.desc && id_lt(k, vs.m_id)) {
                 node = vs.m_id;
+                found = 1;
+            } else if (vstep(&vs, k, eroded_cap(pl, k), h, drop, &node)) {
                 found = 1;
             } else {
                 node = k;

@@ -31,8 +31,8 @@ static void no_ramp(ramp *r, lsm_real dt, lsm_real v)
     lsm_pl_ramp_plan(r, dt, v, v, R1, R1, R1);
 }
 
-/* Ramp A from v0 to vc, placed as early as it verifies. */
-static bool place_A(pctx *pc, lsm_real v0, lsm_real vc, plan5 *p, bool catchup)
+/* Ramp A from v0 to vc, placed as early as it verifies at or after X0 (a lead cruise at v0 before it). */
+static bool place_A(pctx *pc, lsm_real v0, lsm_real vc, plan5 *p, bool catchup, lsm_real X0)
 {
     const lsm_real dt = pc->pl->cfg.cycle_s, D = pc->D;
     p->xA = R0;
@@ -45,32 +45,51 @@ static bool place_A(pctx *pc, lsm_real v0, lsm_real vc, plan5 *p, bool catchup)
             return false;
         return lsm_pl_fit_decel_now(pc, R0, D, v0, vc, &p->A);
     }
-    return lsm_pl_fit_accel(pc, R0, D, v0, vc, false, &p->A, &p->xA);
+    if (X0 > R0 && !lsm_pl_region_ok(pc, R0, X0, v0))
+        return false;
+    return lsm_pl_fit_accel(pc, X0, D, v0, vc, false, &p->A, &p->xA);
 }
 
-/* The whole piece for cruise feed vc: ramp A as early as it verifies, ramp B as late, the cruise between. */
-static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+/* Ramp B (vc -> v1) as late as it verifies after ramp A, and the cruise between them. */
+static bool place_B(pctx *pc, plan5 *p, bool exact)
 {
     const lsm_real dt = pc->pl->cfg.cycle_s, D = pc->D;
-    p->v0 = v0;
-    p->vc = vc;
-    p->v1 = v1;
-    if (!(vc > R0))
-        return false;
-    if (!place_A(pc, v0, vc, p, catchup))
-        return false;
     const lsm_real xa_end = p->xA + p->A.dist;
-    if (vc > v1) {
-        if (!lsm_pl_fit_decel(pc, xa_end, D, vc, v1, exact, false, &p->B, &p->xB))
+    if (p->vc > p->v1) {
+        if (!lsm_pl_fit_decel(pc, xa_end, D, p->vc, p->v1, exact, false, &p->B, &p->xB))
             return false;
     } else {
-        no_ramp(&p->B, dt, vc);
+        no_ramp(&p->B, dt, p->vc);
         p->xB = D;
     }
     if (p->xB < xa_end - LEN_EPS * (R1 + D))
         return false;
     if (p->xB < xa_end)
         p->xB = xa_end;
+    return true;
+}
+
+/* The whole piece for cruise feed vc: ramp A as early as it verifies, ramp B as late, the cruise between. Ramp A is
+ * placed for itself; where a cap below vc follows it (a dip that the lead cruise at v0 could pass, e.g. the corner
+ * a piece starts at), ramp A moves after that dip, once (else the whole piece ran at v0). */
+static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+{
+    p->v0 = v0;
+    p->vc = vc;
+    p->v1 = v1;
+    if (!(vc > R0))
+        return false;
+    if (!place_A(pc, v0, vc, p, catchup, R0) || !place_B(pc, p, exact))
+        return false;
+    lsm_real xa_end = p->xA + p->A.dist;
+    if (lsm_pl_region_ok(pc, xa_end, p->xB, vc))
+        return true;
+    lsm_real x_dip; /* (from rest there is no lead cruise: a ramp from v0 = 0 starts where the piece starts) */
+    if (catchup || !(v0 > R0) || !(vc > v0) || !lsm_pl_last_below(pc, xa_end, p->xB, vc, &x_dip))
+        return false;
+    if (!place_A(pc, v0, vc, p, false, x_dip) || !place_B(pc, p, exact))
+        return false;
+    xa_end = p->xA + p->A.dist;
     return lsm_pl_region_ok(pc, xa_end, p->xB, vc);
 }
 
@@ -216,9 +235,98 @@ static lsm_real time_to(const plan5 *p, lsm_real dt, lsm_real x)
  * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
  * (or the end of the first plan's ramp) sooner than the single ramp.
  */
-static void staircase(pctx *pc, plan5 *best)
+/* Time of the whole piece p of length D. */
+static lsm_real plan_time(const plan5 *p, lsm_real dt, lsm_real D)
+{
+    lsm_real t = time_to(p, dt, p->xB) + (lsm_real)lsm_scurve_total_cycles(&p->B.iv) * dt;
+    const lsm_real xb_end = p->xB + p->B.dist;
+    if (D > xb_end && p->v1 > R0)
+        t += (D - xb_end) / p->v1;
+    return t;
+}
+
+/* The piece from the end of a step at vc (sub) with the highest cruise in [vc, vmax] that verifies (bisection), in
+ * *q; false if not even a cruise at vc verifies. */
+static bool best_after_step(pctx *sub, lsm_real vc, lsm_real vmax, lsm_real v1, bool exact, plan5 *q)
+{
+    if (feas5(sub, vc, vmax, lsm_min2(v1, vmax), exact, false, q))
+        return true;
+    plan5 t;
+    if (!feas5(sub, vc, vc, lsm_min2(v1, vc), exact, false, q))
+        return false;
+    lsm_real l = vc, u = vmax;
+    for (int it = 0; it < VC_BISECT && u - l > SPEED_RES * u; it++) {
+        const lsm_real mid = (l + u) / LSM_R(2.0);
+        if (feas5(sub, vc, mid, lsm_min2(v1, mid), exact, false, &t)) {
+            *q = t;
+            l = mid;
+        } else {
+            u = mid;
+        }
+    }
+    return true;
+}
+
+/* One staircase candidate: a first ramp v0 -> vc, then, re-planned from its end, a second one up to best's cruise.
+ * Taken into *found when it reaches that cruise (or the end of best's ramp A, xe) sooner than best by more than
+ * *gain. With to_end, the second piece is the best one from the end of the first ramp (it need not reach best's
+ * cruise) and the two are compared over the whole piece. */
+static void try_step(pctx *pc, const plan5 *best, lsm_real vc, bool exact, bool to_end, lsm_real *gain, plan5 *found,
+                     bool *have)
 {
     const lsm_real dt = pc->pl->cfg.cycle_s;
+    const lsm_real v0 = best->v0, vmax = best->vc, xe = best->xA + best->A.dist;
+    plan5 p, q;
+    if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
+        return;
+    const lsm_real x1 = p.xA + p.A.dist;
+    if (!(x1 < best->xB))
+        return;
+    /* the second ramp, from the end of the first one */
+    lsm_pl_seek(pc, x1);
+    pctx sub;
+    lsm_pl_pctx_init(&sub, pc->pl, pc->cid, x1 - pc->cx, pc->id_end);
+    if (!(sub.D > LEN_EPS * (R1 + sub.D)))
+        return;
+    lsm_real g;
+    if (to_end) {
+        if (!best_after_step(&sub, vc, vmax, best->v1, exact, &q))
+            return;
+        g = plan_time(best, dt, pc->D) - (time_to(&p, dt, x1) + plan_time(&q, dt, sub.D));
+    } else {
+        if (!feas5(&sub, vc, vmax, lsm_min2(best->v1, vmax), exact, false, &q))
+            return;
+        const lsm_real x2 = x1 + q.xA + q.A.dist;
+        const lsm_real X = lsm_max2(x2, xe);
+        if (!(X <= best->xB) || !(X - x1 <= q.xB))
+            return;
+        g = time_to(best, dt, X) - (time_to(&p, dt, x1) + time_to(&q, dt, X - x1));
+    }
+    if (g > *gain + STAIR_MIN_GAIN_CYCLES * dt) {
+        *gain = g;
+        *found = p;
+        *have = true;
+    }
+}
+
+/*
+ * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
+ * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
+ * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
+ * (a = 0 there, lsm_piece.step), a second one up to the same cruise. For a few lower cruises (geometric levels
+ * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
+ * (or the end of the first plan's ramp) sooner than the single ramp.
+ */
+/*
+ * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
+ * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
+ * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
+ * (a = 0 there, lsm_piece.step), a second one up to the same cruise. Levels tried: geometric levels from the top,
+ * and, where best has a lead cruise at v0, the caps that stretch allows (its suffix minima: a plateau between a
+ * slow start and a fast end, which the geometric levels miss when it lies far below the top, ran at v0).
+ */
+static void staircase(pctx *pc, plan5 *best)
+{
     const lsm_real v0 = best->v0, vmax = best->vc;
     if (!(vmax > v0 * STAIR_MIN_RISE + STAIR_MIN_RISE_ABS) || best->xB < best->xA + best->A.dist)
         return;
@@ -229,9 +337,8 @@ static void staircase(pctx *pc, plan5 *best)
     if (!(best->xA > R0) && best->A.a_lim >= STAIR_UNSLOWED * na && best->A.j_lim >= STAIR_UNSLOWED * nj)
         return;
     const bool exact = !(best->v1 > R0);
-    const lsm_real xe = best->xA + best->A.dist;
     lsm_real gain = R0;
-    plan5 p, q, found;
+    plan5 found;
     memset(&found, 0, sizeof found);
     bool have = false;
     const lsm_real k = STAIR_LEVEL_RATIO;
@@ -240,27 +347,25 @@ static void staircase(pctx *pc, plan5 *best)
         const lsm_real vc = v0 + dv;
         if (!(vc > v0 * (R1 + STAIR_MIN_STEP)))
             break;
-        if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
-            continue;
-        const lsm_real x1 = p.xA + p.A.dist;
-        if (!(x1 < best->xB))
-            continue;
-        /* the second ramp, from the end of the first one */
-        lsm_pl_seek(pc, x1);
-        pctx sub;
-        lsm_pl_pctx_init(&sub, pc->pl, pc->cid, x1 - pc->cx, pc->id_end);
-        if (!(sub.D > LEN_EPS * (R1 + sub.D)) ||
-            !feas5(&sub, vc, vmax, lsm_min2(best->v1, vmax), exact, false, &q))
-            continue;
-        const lsm_real x2 = x1 + q.xA + q.A.dist;
-        const lsm_real X = lsm_max2(x2, xe);
-        if (!(X <= best->xB) || !(X - x1 <= q.xB))
-            continue;
-        const lsm_real g = time_to(best, dt, X) - (time_to(&p, dt, x1) + time_to(&q, dt, X - x1));
-        if (g > gain + STAIR_MIN_GAIN_CYCLES * dt) {
-            gain = g;
-            found = p;
-            have = true;
+        try_step(pc, best, vc, exact, false, &gain, &found, &have);
+    }
+    if (best->xA > R0) {
+        /* the caps of the lead cruise, from its end back to the start: each new lower minimum is a level */
+        const lsm_planner *pl = pc->pl;
+        lsm_pl_seek(pc, best->xA);
+        lsm_real m = vmax;
+        int levels = 0;
+        for (uint32_t id = pc->cid; levels < STAIR_LEVELS; id--) {
+            const lsm_real c = cap_floor(pl, id, blk(pl, id), pc->floor);
+            if (c < m) {
+                m = c;
+                if (!(m > v0 * (R1 + STAIR_MIN_STEP)))
+                    break;
+                try_step(pc, best, m, exact, true, &gain, &found, &have);
+                levels++;
+            }
+            if (id == pc->id0)
+                break;
         }
     }
     if (have) {
@@ -474,6 +579,39 @@ static void plan_cruise(search *s, lsm_real lo)
     }
 }
 
+/* Lower cruises tried when the best plan ends with a trail cruise below its cruise (trail_levels): each this share
+ * of the way from v1 to the last one, at most TRAIL_LEVELS of them. */
+#define TRAIL_LEVELS 4
+#define TRAIL_LEVEL_RATIO LSM_R(0.75)
+
+/* The highest cruise is not always the fastest piece: where ramp B cannot verify late (it would cross a block whose
+ * budgets vanish near its cap at that speed), it moves early and the piece trails the rest at v1 (a corner run at
+ * 1.4 mm/s instead of 29 mm/s: the float build's crawl_random, seed 6). A few lower cruises, whose ramp B can cross
+ * that block, are tried, and the one with the shortest piece time is kept. */
+static void trail_levels(search *s)
+{
+    const lsm_real dt = s->pl->cfg.cycle_s;
+    plan5 *b = &s->best;
+    const lsm_real D = s->pc.D;
+    if (!s->have || !(b->vc > b->v1) || !(D - (b->xB + b->B.dist) > LEN_EPS * (R1 + D)))
+        return;
+    lsm_real t_best = plan_time(b, dt, D);
+    lsm_real vc = b->vc;
+    const lsm_real v0 = b->v0, v1 = b->v1;
+    for (int k = 0; k < TRAIL_LEVELS; k++) {
+        vc = v1 + (vc - v1) * TRAIL_LEVEL_RATIO;
+        if (!(vc > lsm_max2(v0, v1) * (R1 + STAIR_MIN_STEP)))
+            break;
+        if (!feas5(&s->pc, v0, vc, v1, s->exact, false, &s->p))
+            continue;
+        const lsm_real t = plan_time(&s->p, dt, D);
+        if (t < t_best - STAIR_MIN_GAIN_CYCLES * dt) {
+            t_best = t;
+            *b = s->p;
+        }
+    }
+}
+
 /* The stages of the search for the piece to the candidate node id_end (s->pc and s->w1 set). */
 static void plan_to_node(search *s, uint32_t id_end)
 {
@@ -494,6 +632,7 @@ static void plan_to_node(search *s, uint32_t id_end)
     plan_below_dips(s, id_end, lo);
     plan_certified(s);
     plan_cruise(s, lo);
+    trail_levels(s);
 }
 
 /* One pass over the candidate nodes (planner.h: to the next node; if no verified piece reaches it, to the one

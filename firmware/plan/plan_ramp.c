@@ -84,6 +84,26 @@ lsm_real lsm_pl_range_cap(pctx *pc, lsm_real xa, lsm_real xb)
     return m;
 }
 
+bool lsm_pl_last_below(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v, lsm_real *x_end)
+{
+    lsm_pl_seek(pc, xa);
+    uint32_t id = pc->cid;
+    lsm_real x = pc->cx;
+    bool found = false;
+    for (;;) {
+        const lsm_pblock *b = blk(pc->pl, id);
+        x += b->g.len;
+        if (v > cap_floor(pc->pl, id, b, pc->floor) * (R1 + CAP_SLACK)) {
+            found = true;
+            *x_end = x;
+        }
+        id++;
+        if (!(x < xb) || id == pc->id_end)
+            break;
+    }
+    return found;
+}
+
 bool lsm_pl_region_ok(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v)
 {
     if (!(v > R0))

@@ -186,7 +186,7 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
     st = lsm_geom_line_init(&g, from, end);
     if (st != LSM_OK)
         return st;
-    if (g.len <= LEN_EPS * (R1 + lsm_fabs(end[0]) + lsm_fabs(end[1]) + lsm_fabs(end[2])) && !g.rotary_only)
+    if (g.len <= LINE_LEN_EPS * (R1 + lsm_fabs(end[0]) + lsm_fabs(end[1]) + lsm_fabs(end[2])) && !g.rotary_only)
         return LSM_E_ZERO_LENGTH;
     st = lsm_pl_append_line_fit(pl, &g, end, mv);
     return st;
@@ -248,6 +248,34 @@ lsm_status lsm_planner_flush(lsm_planner *pl)
     return lsm_pl_emit_run(pl, pl->fit_n);
 }
 
+/* The program ends exactly on its programmed end: a fitted arc that ends off it (an arc kept in the previous arc's
+ * plane ends off its last point by that point's distance from the plane, within the fit tolerance: plan_fit.c) is
+ * followed by a line to it. (A pending run is split for that by lsm_pl_emit_run_exact; this covers a run emitted
+ * when it reached LSM_ARCFIT_MAX points with the program's last point.) */
+static lsm_status end_exactly(lsm_planner *pl)
+{
+    if (pl->tail == pl->head || !pl->tail_arc) /* (tail_arc: the last block is a fitted arc) */
+        return LSM_OK;
+    if (pl->tail_pos[0] == pl->tail_prog[0] && pl->tail_pos[1] == pl->tail_prog[1] &&
+        pl->tail_pos[2] == pl->tail_prog[2])
+        return LSM_OK;
+    if (lsm_planner_free(pl) < 3)
+        return LSM_E_FULL;
+    const lsm_pblock *last = blk(pl, pl->tail - 1u);
+    lsm_planner_move mv;
+    mv.feed_mm_s = last->feed_mm_s;
+    mv.tol_mm = R0;
+    mv.seq = last->seq;
+    mv.rapid = 0;
+    lsm_geom g;
+    lsm_real end[LSM_MAX_AXES];
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        end[i] = pl->tail_prog[i];
+    if (lsm_geom_line_init(&g, pl->tail_pos, end) != LSM_OK || !(g.len > R0))
+        return LSM_OK;
+    return lsm_pl_append_geom(pl, &g, &mv, end, NULL);
+}
+
 lsm_status lsm_planner_finish(lsm_planner *pl)
 {
     if (pl == NULL)
@@ -256,6 +284,8 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
     if (pl->finished)
         return LSM_OK;
     lsm_status st = lsm_pl_emit_run_exact(pl);
+    if (st == LSM_OK)
+        st = end_exactly(pl);
     if (st != LSM_OK)
         return st;
     pl->finished = 1;

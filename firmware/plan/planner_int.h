@@ -26,9 +26,14 @@
 #if LSM_REAL_IS_FLOAT
 #define CAP_SLACK LSM_R(2e-6)
 #define LEN_EPS LSM_R(1e-5)
+/* A line too short to append: within a few ulp of its coordinates (its end minus its start is exact, so its
+ * direction is well defined above that). LEN_EPS (84 eps) dropped 0.015 mm lines at 700 mm, and the program's
+ * exact end with them. */
+#define LINE_LEN_EPS (LSM_R(4.0) * LSM_REAL_EPS)
 #else
 #define CAP_SLACK LSM_R(1e-9)
 #define LEN_EPS LSM_R(1e-9)
+#define LINE_LEN_EPS LEN_EPS
 #endif
 /* Iteration caps of the ramp fitting and of the bisections. */
 #define FIT_ITER 40
@@ -125,6 +130,8 @@ void lsm_pl_pctx_init(pctx *pc, const lsm_planner *pl, uint32_t id0, lsm_real of
 void lsm_pl_seek(pctx *pc, lsm_real x);
 /* Lowest cap over [xa, xb]. */
 lsm_real lsm_pl_range_cap(pctx *pc, lsm_real xa, lsm_real xb);
+/* The end of the last block over [xa, xb] whose cap is below v (false: none). */
+bool lsm_pl_last_below(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v, lsm_real *x_end);
 /* A cruise at v fits every cap over [xa, xb]. */
 bool lsm_pl_region_ok(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v);
 

@@ -20,6 +20,8 @@ import canopen
 ABORT_GAP = 0x06090031
 ABORT_FULL = 0x08000020
 ABORT_STATE = 0x08000022
+ABORT_SDO_TIMEOUT = 0x05040000  # the server timed the transfer out
+ABORT_SDO_COMMAND = 0x05040001  # the server took a segment for something else (the transfer is gone)
 
 
 def encode_block(seq, blk, counts_per_mm, tol_mm=0.01, origin=None):
@@ -50,7 +52,7 @@ class PathStreamer:
         self.free_slots = free_slots
         self.log = log if log is not None else []
         self.sent = 0
-        self.retries = {"full": 0, "gap": 0, "timeout": 0}
+        self.retries = {"full": 0, "gap": 0, "timeout": 0, "aborted": 0}
         self.waits = 0  # times no free slot was reported (flow control held the stream)
 
     def last_accepted(self):
@@ -116,6 +118,12 @@ class PathStreamer:
                 self.retries["full"] += 1
                 waited_full = False
                 time.sleep(0.01)
+            elif code in (ABORT_SDO_TIMEOUT, ABORT_SDO_COMMAND):
+                # the transfer broke (a late master: the server timed out, or took a segment for a new request);
+                # the same block again: if the first attempt was stored, it is acknowledged as a duplicate
+                self.retries["aborted"] += 1
+                self.log.append(("aborted", first_seq + i, code))
+                continue
             elif code == ABORT_GAP:
                 self.retries["gap"] += 1
                 last = self.last_accepted()

@@ -1,9 +1,13 @@
 """The HIL rig: a Lissom node on a CAN bus, driven by the PyPI `canopen` master (BaseNode402 + hil/lissom.eds).
 
-Two kinds of rig (pytest --rig, see hil/tests/conftest.py):
+Three kinds of rig (pytest --rig, see hil/tests/conftest.py):
   vcan   the rig starts build/bin/lissom-node on vcan0 for every test (fresh state, per-cycle trace available);
   can0   a real CAN interface; by default the node is an external board (the rig resets it with NMT and uses
          only what CANopen shows); --rig-local also starts lissom-node on that interface.
+  mcu    the Cortex-M4F controller image under QEMU (scripts/mcu_node.sh, lissom_hil.mcu), reached through
+         python-can's slcan interface on its TCP port; one image for the session, treated as an external board
+         (NMT reset per test, CANopen only). Its clock runs slower than real time by construction (docs/cortex_m.md):
+         checks of the node's periods convert with clock_start() / clock_scale() over the window they observe.
 
     rig = Rig(RigConfig(kind="vcan")); rig.open(); rig.start()
     rig.operational(); rig.enable(0, mode="PROFILED POSITION")
@@ -54,7 +58,7 @@ BUILTIN_LIMITS = {"v": 250.0, "a": 3000.0, "j": 60000.0, "snap": 1.18e7}
 
 @dataclass
 class RigConfig:
-    kind: str = "vcan"                 # vcan | can0
+    kind: str = "vcan"                 # vcan | can0 | mcu
     iface: Optional[str] = None        # default vcan0 / can0
     node_id: int = 1
     local: Optional[bool] = None       # start lissom-node (default: True on vcan, False on can0)
@@ -67,7 +71,9 @@ class RigConfig:
     def resolved(self):
         c = RigConfig(**self.__dict__)
         if c.iface is None:
-            c.iface = "vcan0" if c.kind == "vcan" else c.kind
+            c.iface = {"vcan": "vcan0", "mcu": "slcan"}.get(c.kind, c.kind)
+        if c.kind == "mcu":
+            c.local = False
         if c.local is None:
             c.local = c.kind == "vcan"
         return c
@@ -87,6 +93,9 @@ class Rig:
         self._sync_period = None
         self._pdo_ready = False
         self._tmp = tempfile.mkdtemp(prefix="lissom-hil-")
+        self.mcu = None          # lissom_hil.mcu.McuImage (kind mcu)
+        self.time_scale = 1.0    # real seconds per node second, roughly (mcu: measured at open; for waits only)
+        self.tick_stats = None   # the image's 0x5F00 at close (kind mcu)
         self.axis_names = "XYZUVW"
         self.limits = [dict(BUILTIN_LIMITS, cpm=1000.0) for _ in range(6)]
         if self.cfg.machine:
@@ -98,7 +107,13 @@ class Rig:
                                   "snap": a["snap_max_mm_s4"], "cpm": 1000.0}
 
     # ---- session -------------------------------------------------------------------------------------
+    @property
+    def kind(self):
+        return self.cfg.kind
+
     def open(self):
+        if self.cfg.kind == "mcu":
+            return self._open_mcu()
         self.frames = FrameLog(self.cfg.iface).start()
         self.network = canopen.Network()
         # the master only listens to what it uses (SDO responses, heartbeat, EMCY, TPDO1 with the statusword):
@@ -114,7 +129,36 @@ class Rig:
                 pass
         return self
 
+    def _open_mcu(self):
+        from .mcu import BusFrameLog, McuImage
+        self.mcu = McuImage(self.cfg.node_id, self.cfg.axes, log_path=os.path.join(self.cfg.out_dir, "qemu.log"))
+        self.mcu.start()
+        self.network = canopen.Network()
+        self.frames = BusFrameLog(self.network)
+        self.network.connect(interface="slcan", channel=self.mcu.channel, bitrate=1000000, sleep_after_open=0)
+        self.frames.start()
+        self.time_scale = self._measure_time_scale()
+        return self
+
+    def _tick_stats(self, node):
+        return [node.sdo[0x5F00][i].raw for i in range(1, 7)]
+
+    def _measure_time_scale(self, span_s=1.0):
+        """Real seconds per node second, from the image's clock (0x5F00 sub 6, ms) over span_s of real time."""
+        node = canopen.RemoteNode(self.cfg.node_id, EDS)
+        node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
+        self.network.add_node(node)
+        try:
+            t0, n0 = time.monotonic(), node.sdo[0x5F00][6].raw
+            time.sleep(span_s)
+            t1, n1 = time.monotonic(), node.sdo[0x5F00][6].raw
+        finally:
+            del self.network[self.cfg.node_id]
+        return (t1 - t0) / ((n1 - n0) * 1e-3)
+
     def close(self):
+        if self.mcu is not None and self.network is not None:
+            self._save_tick_stats()
         if self.node is not None or self.proc is not None:
             self.stop()
         if self.network is not None:
@@ -123,7 +167,30 @@ class Rig:
         if self.frames is not None:
             self.frames.stop()
             self.frames = None
+        if self.mcu is not None:
+            self.mcu.stop()
+            self.mcu = None
         shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def _save_tick_stats(self):
+        """The image's tick statistics (0x5F00) at the end of the session, to <out_dir>/tick_stats.json."""
+        node = canopen.RemoteNode(self.cfg.node_id, EDS)
+        node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
+        if self.cfg.node_id in self.network:
+            del self.network[self.cfg.node_id]
+        self.network.add_node(node)
+        try:
+            st = self._tick_stats(node)
+        except Exception as e:  # the figures must not hide the test results
+            print("tick statistics: %s" % e, file=sys.stderr)
+            return
+        self.tick_stats = {"ticks": st[0], "overruns": st[1], "worst_tick_instructions": st[2],
+                           "background_load_permille": st[3], "late_wakes": st[4], "clock_ms": st[5],
+                           "tick_budget_instructions": 168000,
+                           "time_scale": self.time_scale}
+        os.makedirs(self.cfg.out_dir, exist_ok=True)
+        with open(os.path.join(self.cfg.out_dir, "tick_stats.json"), "w") as f:
+            json.dump(self.tick_stats, f, indent=1)
 
     def set_test_dir(self, name):
         self.test_dir = os.path.join(self.cfg.out_dir, name)
@@ -200,6 +267,68 @@ class Rig:
     def require_local(self, pytest_mod, why="needs the local lissom-node (trace, simulated inputs)"):
         if not self.cfg.local:
             pytest_mod.skip(why)
+
+    @property
+    def has_motion(self):
+        """False only for a controller image built with the interim hold layer (its ready line says motion=hold)."""
+        if self.mcu is None:
+            return True
+        return "motion=hold" not in self.mcu.ready_line
+
+    def read_tick_stats(self):
+        """The M4 image's tick statistics (0x5F00) as a dict; None on other nodes."""
+        if self.cfg.kind != "mcu":
+            return None
+        st = [self.read(0x5F00, i) for i in range(1, 7)]
+        return dict(zip(("ticks", "overruns", "worst_tick_instructions", "background_load_permille", "late_wakes",
+                         "clock_ms"), st))
+
+    def node_heartbeat_period(self, state=None, intervals=12, timeout=30.0):
+        """The M4 image's heartbeat period in its own clock (s): waits for a heartbeat (state byte `state`, None:
+        any), reads the node's clock (0x5F00 sub 6) right after it, waits for `intervals` more heartbeats and reads
+        the clock again. Both reads come one SDO round trip after a heartbeat, so their difference is the node time
+        of the intervals (to the difference of the two round trips). Event-based: no wall-clock waits."""
+        nid = self.cfg.node_id
+
+        def pred(f):
+            return f.id == 0x700 + nid and len(f.data) == 1 and (state is None or f.data[0] == state)
+
+        m = self.frames.mark()
+        f = self.frames.wait(pred, timeout, m)
+        if f is None:
+            raise TimeoutError("no heartbeat within %.0f s" % timeout)
+        n0 = self.read(0x5F00, 6)
+        since = self.frames.mark()
+        for _ in range(intervals):
+            f = self.frames.wait(pred, timeout, since)
+            if f is None:
+                raise TimeoutError("heartbeats stopped")
+            since = self.frames.frames.index(f, since) + 1 if hasattr(self.frames, "frames") else self.frames.mark()
+        n1 = self.read(0x5F00, 6)
+        return ((n1 - n0) & 0xFFFFFFFF) * 1e-3 / intervals
+
+    def require_socketcan(self, pytest_mod, why="needs a SocketCAN interface for a second tool on the bus; the M4 image "
+                                                "is reached over slcan on TCP, which takes one client (slcand would give "
+                                                "one: docs/cortex_m.md)"):
+        if self.cfg.kind == "mcu":
+            pytest_mod.skip(why)
+
+    def clock_start(self):
+        """Start of a window over which the node's clock is compared with real time (clock_scale). None on rigs
+        whose node runs on real time (lissom-node); the M4 image: (real time, its clock in ms, 0x5F00 sub 6)."""
+        if self.cfg.kind != "mcu":
+            return None
+        return time.monotonic(), self.read(0x5F00, 6)
+
+    def clock_scale(self, start):
+        """Real seconds per second of the node's clock since clock_start() (1.0 for a real-time node). The M4
+        image's clock runs at about 1/1.344 of real time, and slower still when QEMU falls behind (docs/cortex_m.md),
+        so checks of the node's periods convert with the scale of the window they observe."""
+        if start is None:
+            return 1.0
+        t0, n0 = start
+        t1, n1 = time.monotonic(), self.read(0x5F00, 6)
+        return (t1 - t0) / (((n1 - n0) & 0xFFFFFFFF) * 1e-3)
 
     # ---- NMT -----------------------------------------------------------------------------------------
     def nmt(self, command):

@@ -5,6 +5,7 @@ import struct
 import time
 
 import numpy as np
+import pytest
 
 from lissom_hil.checks import stop_violations
 
@@ -12,6 +13,7 @@ PERIOD_S = 0.010
 V_MM_S = 40.0
 
 
+@pytest.mark.motion
 def test_csp(rig):
     nid = rig.node_id
     cpm = rig.cpm(0)

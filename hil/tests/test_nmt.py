@@ -14,11 +14,16 @@ def _hb_times(rig, since, state=None):
 def test_nmt(rig):
     nid = rig.node_id
     # boot-up (sent once, state byte 0) then heartbeats in PRE-OPERATIONAL (0x7F) every 100 ms (0x1017 default)
-    m = rig.frames.mark()
-    time.sleep(0.65)
-    t = _hb_times(rig, m, 0x7F)
-    assert len(t) >= 5, "heartbeats in PRE-OPERATIONAL: %d" % len(t)
-    period = np.median(np.diff(t))
+    # of the node's clock (the M4 image's clock runs slower than real time and unevenly under load: its period is
+    # measured in its own clock, docs/cortex_m.md)
+    if rig.kind == "mcu":
+        period = rig.node_heartbeat_period(0x7F)
+    else:
+        m = rig.frames.mark()
+        time.sleep(0.65)
+        t = _hb_times(rig, m, 0x7F)
+        assert len(t) >= 5, "heartbeats in PRE-OPERATIONAL: %d" % len(t)
+        period = np.median(np.diff(t))
     assert abs(period - 0.100) < 0.015, "heartbeat period %.4f s" % period
     assert rig.read(0x1017) == 100
 
@@ -52,12 +57,16 @@ def test_nmt(rig):
 
     # heartbeat producer time: 50 ms, then off
     rig.write(0x1017, 50)
-    m = rig.frames.mark()
-    time.sleep(0.45)
-    t = _hb_times(rig, m)
-    assert len(t) >= 6 and abs(np.median(np.diff(t)) - 0.050) < 0.01, "50 ms heartbeat: %s" % np.diff(t)
+    if rig.kind == "mcu":
+        period = rig.node_heartbeat_period()
+        assert abs(period - 0.050) < 0.01, "50 ms heartbeat: %.4f s" % period
+    else:
+        m = rig.frames.mark()
+        time.sleep(0.45)
+        t = _hb_times(rig, m)
+        assert len(t) >= 6 and abs(np.median(np.diff(t)) - 0.050) < 0.01, "50 ms heartbeat: %s" % np.diff(t)
     rig.write(0x1017, 0)
-    time.sleep(0.06)
+    time.sleep(0.06 * rig.time_scale)
     m = rig.frames.mark()
     time.sleep(0.3)
     assert len(_hb_times(rig, m)) == 0, "heartbeat still produced with 0x1017 = 0"

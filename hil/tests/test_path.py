@@ -7,6 +7,7 @@ import struct
 import time
 
 import numpy as np
+import pytest
 
 from lissom_hil.gcode import ARC_CCW, LINE, read_gcode
 from lissom_hil.path_stream import ABORT_GAP, PathStreamer
@@ -136,6 +137,7 @@ def _run_program(rig, extra, name):
     return blocks, streamer, tr
 
 
+@pytest.mark.motion
 def test_path_gcode(rig):
     """Look-ahead planner (the node's default executor): a small buffer (4 co_path slots) so that the stream
     must wait for free slots; corners blended within the tolerance, every axis within its v, a, j limits."""
@@ -152,6 +154,7 @@ def test_path_gcode(rig):
         assert np.min(tr["feed_mm_s"][k - 20:k + 20]) > 0.1, "stopped at a blended corner"
 
 
+@pytest.mark.motion
 def test_path_exact(rig):
     """The exact-stop executor (--path-exec exact): every block alone, on the geometry to rounding."""
     blocks, _, tr = _run_program(rig, ["--path-exec", "exact"], "exact")
@@ -160,6 +163,7 @@ def test_path_exact(rig):
         assert dev < 1e-6, "the path left the programmed geometry by %.3g mm" % dev
 
 
+@pytest.mark.motion
 def test_path_seq(rig):
     """Gaps and duplicates: nothing lost, nothing applied twice."""
     pts = [(5.0 * (i + 1), 4.0 * (i % 2), 0.0) for i in range(10)]
@@ -194,6 +198,7 @@ def test_path_seq(rig):
         assert _on_block_geometry(tr, blocks) <= TOL_MM * 1.01
 
 
+@pytest.mark.motion
 def test_path_hold(rig):
     """Feed hold and resume on the path, override, clear."""
     _path_setup(rig)

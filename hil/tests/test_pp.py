@@ -4,6 +4,7 @@ telemetry at each SYNC and, exactly, per control cycle from the node's trace."""
 import time
 
 import numpy as np
+import pytest
 
 from lissom_hil.checks import last_move, stop_violations, telemetry_velocity_ok
 from lissom_hil.telemetry import Telemetry, write_run_csv
@@ -72,11 +73,13 @@ def _move_and_check(rig, tel, target, ptype, name):
     return end - start
 
 
+@pytest.mark.motion
 def test_pp_sin2(rig):
     tel = _setup(rig)
     _move_and_check(rig, tel, 40.0, 1, "sin2")
 
 
+@pytest.mark.motion
 def test_pp_linear(rig):
     tel = _setup(rig)
     n_lin = _move_and_check(rig, tel, 40.0, 0, "linear")
@@ -86,6 +89,7 @@ def test_pp_linear(rig):
         assert n_lin < n_sin < 1.5 * n_lin, "cycles: linear %d, sin² %d" % (n_lin, n_sin)
 
 
+@pytest.mark.motion
 def test_pp_setpoints(rig):
     _setup(rig)
     rig.set_profile(0, profile_type=1, **PROFILE)

@@ -76,6 +76,7 @@ def _rest_seconds(rig, since, x_counts, y_counts):
 
 
 def test_stream_program(rig, tmp_path):
+    rig.require_socketcan(pytest)
     mark = rig.frames.mark()
     p = _stream(rig, PROGRAM, tmp_path)
     out, err = p.communicate(timeout=120)
@@ -115,6 +116,7 @@ def test_stream_program(rig, tmp_path):
 
 
 def test_stream_hold_and_quick_stop(rig, tmp_path):
+    rig.require_socketcan(pytest)
     """Ctrl-C: feed hold (the path state goes to held, the process waits); Ctrl-C again: quick stop, exit 130."""
     mark = rig.frames.mark()
     p = _stream(rig, "G21 G90\nG1 X300 F1200\nM2\n", tmp_path)

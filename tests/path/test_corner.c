@@ -30,6 +30,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "lsm_test_geom.h"
 #include "lsm_test_rng.h"
 #include <string.h>
 
@@ -156,10 +157,10 @@ static double dist_block(const lsm_geom *g, const double p[3])
     }
     const lsm_geom_arc *a = &g->u.arc;
     double e1[3], e2[3], n[3], c[3];
+    test_arc_centre(g, c);
     for (int i = 0; i < 3; i++) {
         e1[i] = a->e1[i];
         e2[i] = a->e2[i];
-        c[i] = a->centre_mm[i];
     }
     cross(e1, e2, n);
     const double w[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
@@ -462,9 +463,11 @@ static void check_corner(const corner_case *k, const lsm_corner_result *r, long 
     const lsm_geom *bb[2] = {&k->b1, &k->b2};
     for (int i = 0; i < 2; i++) {
         const lsm_geom *g = bb[i];
+        double gc[3] = {0, 0, 0};
+        if (g->kind == LSM_GEOM_ARC)
+            test_arc_centre(g, gc);
         const double m = g->kind == LSM_GEOM_ARC
-                             ? fabs(g->u.arc.centre_mm[0]) + fabs(g->u.arc.centre_mm[1]) + fabs(g->u.arc.centre_mm[2]) +
-                                   g->u.arc.radius_mm
+                             ? fabs(gc[0]) + fabs(gc[1]) + fabs(gc[2]) + g->u.arc.radius_mm
                              : fabs(g->u.line.p0[0]) + fabs(g->u.line.p0[1]) + fabs(g->u.line.p0[2]) + g->len;
         if (m > mag)
             mag = m;
@@ -500,10 +503,12 @@ static void check_corner(const corner_case *k, const lsm_corner_result *r, long 
         const lsm_geom *blk[2] = {&k->b1, &k->b2};
         for (int i = 0; i < 2; i++) {
             const lsm_geom *g = blk[i];
+            double gc[3] = {0, 0, 0};
+            if (g->kind == LSM_GEOM_ARC)
+                test_arc_centre(g, gc);
             if (g->kind == LSM_GEOM_ARC)
                 print_error("  b%d arc c %.17g %.17g %.17g e1 %.17g %.17g %.17g e2 %.17g %.17g %.17g r %.17g phi0 %.17g "
-                            "sweep %.17g\n", i + 1, (double)g->u.arc.centre_mm[0], (double)g->u.arc.centre_mm[1],
-                            (double)g->u.arc.centre_mm[2], (double)g->u.arc.e1[0], (double)g->u.arc.e1[1],
+                            "sweep %.17g\n", i + 1, gc[0], gc[1], gc[2], (double)g->u.arc.e1[0], (double)g->u.arc.e1[1],
                             (double)g->u.arc.e1[2], (double)g->u.arc.e2[0], (double)g->u.arc.e2[1],
                             (double)g->u.arc.e2[2], (double)g->u.arc.radius_mm, (double)g->u.arc.phi0_rad,
                             (double)g->u.arc.sweep_rad);

@@ -6,8 +6,8 @@
  * Every random program is run cycle by cycle through the interpolator while its blocks are appended (streaming,
  * a small look-ahead so that the buffer wraps and runs low), and checked from the setpoints alone:
  *   - per axis, |dq|/dt, |d²q|/dt², |d³q|/dt³ (backward differences, at rest before and after, Beudaert eq 6)
- *     within 1e-6 relative of the axis limits (float: plus the rounding of the float positions, 8 ulp / dt³ for
- *     the jerk, stated below);
+ *     within 1e-6 relative of the axis limits (float: plus the rounding of the float positions, 2^n ulp / dt^n for
+ *     the n-th difference with ulp that of the workspace's half-width, stated below);
  *   - the distance of every 3rd setpoint from the programmed path within the largest blend tolerance of the
  *     program (G61-only programs: on the path), the path followed in program order (closed-form distances to
  *     lines and planar arcs), so that a path passing over itself is measured against the right pass;
@@ -30,19 +30,17 @@
 #include <cmocka.h>
 
 #include "interp.h"
+#include "lsm_test_geom.h"
 #include "lsm_test_rng.h"
 #include "planner.h"
 
 static unsigned long g_seed = 1;
 static long g_count = 24;
 
-#if LSM_REAL_IS_FLOAT
-#define CYCLE 0.004   /* float positions: a longer cycle keeps the rounding noise of the 3rd difference small */
-#define SPAN 20.0     /* workspace half-width (mm) */
-#else
+/* The same machine, workspace and counts in both builds (float: the noise bound of noise() below is the only
+ * difference; test_path_limits.c derives it). */
 #define CYCLE 0.001
-#define SPAN 150.0
-#endif
+#define SPAN 150.0    /* workspace half-width (mm) */
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* programs                                                                                                    */
@@ -277,9 +275,10 @@ static double dist_geom(const lsm_geom *g, const double x[3])
         const double n[3] = {(double)a->e1[1] * (double)a->e2[2] - (double)a->e1[2] * (double)a->e2[1],
                              (double)a->e1[2] * (double)a->e2[0] - (double)a->e1[0] * (double)a->e2[2],
                              (double)a->e1[0] * (double)a->e2[1] - (double)a->e1[1] * (double)a->e2[0]};
-        double u = 0, v = 0, z = 0;
+        double u = 0, v = 0, z = 0, ac[3];
+        test_arc_centre(g, ac);
         for (int i = 0; i < 3; i++) {
-            const double r = x[i] - (double)a->centre_mm[i];
+            const double r = x[i] - ac[i];
             u += r * (double)a->e1[i];
             v += r * (double)a->e2[i];
             z += r * n[i];

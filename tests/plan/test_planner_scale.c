@@ -274,7 +274,8 @@ static void run_shape(shape_kind kind, long n, uint64_t seed, scale_res *r)
 static void check_shape(shape_kind kind)
 {
     const long q = 4 * (RASTER_ROW + 1);
-    const long n = ((g_points < 2 * q ? 2 * q : g_points) + q - 1) / q * q;
+    /* (at least 4,000 points: shorter programs do not span the same geometry in every quarter) */
+    const long n = ((g_points < 4000 ? 4000 : g_points) + q - 1) / q * q;
     scale_res r;
     run_shape(kind, n, g_seed, &r);
     const double t_ramp = 2.0 * FEED / 1500.0 + 1500.0 / 30000.0; /* 2F/A + A/J with half the default limits */
@@ -349,6 +350,132 @@ static void test_raster(void **state)
     check_shape(SH_RASTER);
 }
 
+/* ---------------------------------------------------------------------------------------------------------- */
+/* short programs: the crawl (issue 14) and exact ends                                                         */
+
+/* Runs the lines through pts[1..n-1] (start pts[0]) at feeds f[i] (mm/s, block i ends at pts[i]) with tolerance
+ * tol (0: G61); returns the machine time, or -1 if it did not end exactly on the last point within max_s. */
+static double run_lines(const double (*pts)[3], const double *f, int n, double tol, double max_s)
+{
+    lsm_planner_config cfg;
+    config(&cfg);
+    static lsm_pblock store[CAPACITY];
+    static lsm_planner pl;
+    static lsm_interp ip;
+    lsm_real start[LSM_MAX_AXES] = {0};
+    for (int k = 0; k < 3; k++)
+        start[k] = (lsm_real)pts[0][k];
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, CAPACITY, start), LSM_OK);
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    int next = 1, fin = 0;
+    lsm_real pos[LSM_MAX_AXES];
+    lsm_interp_state st = LSM_INTERP_IDLE;
+    long k;
+    const long max_cycles = (long)(max_s / CYCLE);
+    for (k = 0; k < max_cycles && st != LSM_INTERP_DONE; k++) {
+        while (next < n && lsm_planner_free(&pl) >= 3) {
+            lsm_real e[LSM_MAX_AXES] = {0};
+            for (int a = 0; a < 3; a++)
+                e[a] = (lsm_real)pts[next][a];
+            const lsm_planner_move mv = {(lsm_real)f[next], (lsm_real)tol, (uint32_t)next, 0};
+            const lsm_status as = lsm_planner_append_line(&pl, e, &mv);
+            if (as == LSM_E_FULL)
+                break;
+            assert_int_equal(as, LSM_OK);
+            next++;
+        }
+        if (!fin && next == n && lsm_planner_finish(&pl) == LSM_OK)
+            fin = 1;
+        (void)lsm_interp_prepare(&ip);
+        st = lsm_interp_step(&ip, pos);
+    }
+    if (st != LSM_INTERP_DONE || pl.stats.plan_fallbacks != 0)
+        return -1.0;
+    for (int a = 0; a < 3; a++)
+        if (pos[a] != (lsm_real)pts[n - 1][a])
+            return -1.0;
+    return (double)k * CYCLE;
+}
+
+/* G64 P0.01: G1 X30 F3000, then G1 X30 Y1 F30 took 63.5 s, the G61 version 2.68 s: the first block starts from a
+ * stop (the start) and the backward pass's node detection did not test the drop of the cap after a stop block, so
+ * one piece ran both blocks, its one cruise at the slow block's feed. A feed that falls by steps of 20 % (each
+ * below node_drop) crawled the same way at the last feed (nodes tested the drop from the next block only). */
+static void test_crawl(void **state)
+{
+    (void)state;
+    const double pts[3][3] = {{0, 0, 0}, {30, 0, 0}, {30, 1, 0}};
+    const double f[3] = {0, 50.0, 0.5};
+    const double t64 = run_lines(pts, f, 3, 0.01, 200.0), t61 = run_lines(pts, f, 3, 0.0, 200.0);
+    print_message("crawl: G64 P0.01 %.3f s, G61 %.3f s\n", t64, t61);
+    assert_true(t61 > 0 && t64 > 0);
+    assert_true(t64 <= 1.05 * t61 + 0.05);
+    /* the descending staircase of feeds on one line */
+    double sp[13][3], sf[13], L_F = 0, v = 50.0;
+    for (int i = 0; i < 13; i++) {
+        sp[i][0] = 10.0 * i;
+        sp[i][1] = sp[i][2] = 0;
+        sf[i] = v;
+        if (i > 0) {
+            L_F += 10.0 / v;
+            v *= 0.8;
+        }
+    }
+    const double ts = run_lines(sp, sf, 13, 0.01, 200.0);
+    print_message("staircase of feeds 50 .. %.1f mm/s: %.3f s, L/F %.3f s\n", sf[12], ts, L_F);
+    assert_true(ts > 0);
+    assert_true(ts <= 1.15 * L_F + 2.0 * 50.0 / 1500.0 + 1500.0 / 30000.0);
+}
+
+/* Random short programs (2 to 6 lines in random directions, feeds log-uniform 0.5 .. 100 mm/s): blending the
+ * corners (G64 P0.01) never takes much longer than stopping at each (G61). The bound is the design's: a piece has one
+ * cruise, and within a piece no cap falls by node_drop (25 %) or more below one before it (else a node is there),
+ * so a stretch may run up to that much below its own cap; a crawl is many times slower. */
+static void test_crawl_random(void **state)
+{
+    (void)state;
+    uint64_t rs = g_seed * 0x2545F4914F6CDD1Dull + 77u;
+    const long count = 200;
+    for (long c = 0; c < count; c++) {
+        double pts[7][3], f[7];
+        const int n = 3 + (int)(test_urand(&rs) * 5.0);
+        pts[0][0] = pts[0][1] = pts[0][2] = 0.0;
+        f[0] = 0;
+        for (int i = 1; i < n; i++) {
+            const double L = test_logu(&rs, 0.05, 30.0), th = test_urand(&rs) * 6.283185307179586;
+            const double z = test_urand(&rs) < 0.3 ? (test_urand(&rs) - 0.5) * L : 0.0;
+            pts[i][0] = round((pts[i - 1][0] + L * cos(th)) * 1e4) / 1e4;
+            pts[i][1] = round((pts[i - 1][1] + L * sin(th)) * 1e4) / 1e4;
+            pts[i][2] = round((pts[i - 1][2] + z) * 1e4) / 1e4;
+            f[i] = test_logu(&rs, 0.5, 100.0);
+        }
+        const double t64 = run_lines(pts, f, n, 0.01, 2000.0), t61 = run_lines(pts, f, n, 0.0, 2000.0);
+        const double bound = t61 / (1.0 - LSM_PLANNER_NODE_DROP) + 0.1;
+        if (!(t64 > 0 && t61 > 0 && t64 <= bound))
+        {
+            print_message("FAILED crawl_random: seed %lu, program %ld: G64 %.3f s, G61 %.3f s\n", g_seed, c, t64, t61);
+            for (int i = 1; i < n; i++)
+                print_message("  G1 X%.4f Y%.4f Z%.4f F%.3f\n", pts[i][0], pts[i][1], pts[i][2], f[i] * 60.0);
+        }
+        assert_true(t64 > 0 && t61 > 0);
+        assert_true(t64 <= bound);
+    }
+}
+
+/* A 3-D ring whose last point closes a run of LSM_ARCFIT_MAX points (emitted at once, in the previous arc's
+ * plane, off its last point by that point's distance from the plane): the program still ends exactly on it. */
+static void test_ring_ends(void **state)
+{
+    (void)state;
+    for (long n = 100; n < 100 + 2 * LSM_ARCFIT_MAX; n++) {
+        scale_res r;
+        run_shape(SH_RING, n, g_seed + (unsigned long)n, &r);
+        if (!r.end_exact)
+            print_message("FAILED ring_ends: seed %lu, points %ld: off by %.3g mm\n", g_seed, n, r.end_err);
+        assert_true(r.end_exact);
+    }
+}
+
 int main(int argc, char **argv)
 {
     g_seed = (unsigned long)test_arg_u(argc, argv, 1, 1);
@@ -356,7 +483,8 @@ int main(int argc, char **argv)
     print_message("seed %lu, points %ld per shape\n", g_seed, g_points);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_circle), cmocka_unit_test(test_spiral), cmocka_unit_test(test_ellipse),
-        cmocka_unit_test(test_ring3d), cmocka_unit_test(test_raster),
+        cmocka_unit_test(test_ring3d), cmocka_unit_test(test_raster), cmocka_unit_test(test_crawl),
+        cmocka_unit_test(test_crawl_random), cmocka_unit_test(test_ring_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

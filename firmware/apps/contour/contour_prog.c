@@ -133,6 +133,13 @@ static void add_sample(lsm_contour *c)
 
 lsm_contour_result lsm_contour_cycle(lsm_contour *c)
 {
+    if (lsm_contour_background(c) != LSM_CONTOUR_RUNNING)
+        return (lsm_contour_result)c->result;
+    return lsm_contour_step(c);
+}
+
+lsm_contour_result lsm_contour_background(lsm_contour *c)
+{
     if (c->result != LSM_CONTOUR_RUNNING)
         return (lsm_contour_result)c->result;
     /* 1. feed: one item per cycle */
@@ -170,8 +177,16 @@ lsm_contour_result lsm_contour_cycle(lsm_contour *c)
         else if (st != LSM_E_FULL)
             return fail(c, st);
     }
-    /* 2. background planning (lsm_interp_prepare), then one interpolator cycle */
+    /* 2. background planning (lsm_interp_prepare) */
     (void)lsm_interp_prepare(&c->ip);
+    return LSM_CONTOUR_RUNNING;
+}
+
+lsm_contour_result lsm_contour_step(lsm_contour *c)
+{
+    if (c->result != LSM_CONTOUR_RUNNING)
+        return (lsm_contour_result)c->result;
+    /* 3. one interpolator cycle */
     const lsm_interp_state s = lsm_interp_step(&c->ip, c->pos);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         c->hash = hash_u32(c->hash, bits_of(c->pos[i]));

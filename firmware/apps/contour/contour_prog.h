@@ -9,11 +9,14 @@
  * that the planner smooths with clothoid pairs (tol_mm > 0), ending with an exact stop on (0, 0, 0). About 165 mm
  * at 80-120 mm/s with the planner's default limits and a 1 ms cycle: about 2 s of motion.
  *
- * Execution, one call of lsm_contour_cycle per control cycle (the image calls it from its SysTick tick):
- *   1. feed: at most one program item is appended per cycle (a streaming reader), while the planner has room;
- *      after the last one, lsm_planner_finish;
- *   2. lsm_interp_step: the setpoints of every axis; each one's bit pattern goes into an FNV-1a checksum.
- * The result is deterministic: it depends on nothing but the program and the core.
+ * Execution, one lsm_contour_cycle per control cycle, which is lsm_contour_background then lsm_contour_step:
+ *   1. feed (background): at most one program item is appended per cycle (a streaming reader), while the planner
+ *      has room; after the last one, lsm_planner_finish;
+ *   2. lsm_interp_prepare (background): the next piece planned ahead of the interpolator;
+ *   3. lsm_interp_step (step, the control tick): the setpoints of every axis; each one's bit pattern goes into an
+ *      FNV-1a checksum.
+ * The result is deterministic: it depends on nothing but the program and the core, as long as the calls keep
+ * this order (the image runs 1-2 in its main loop and 3 in SysTick, in lock-step: contour_main.c).
  *
  * Memory: everything is in the caller's lsm_contour object, with a look-ahead of LSM_CONTOUR_BLOCKS blocks.
  * No I/O: lsm_contour_report formats the report lines itself and hands each one to the caller's put function.
@@ -84,8 +87,14 @@ void lsm_contour_config(lsm_planner_config *cfg, uint8_t axis_mask);
 /* Resets to the start (0, ..., 0) with the X Y Z configuration. Errors: those of lsm_planner_init. */
 lsm_status lsm_contour_init(lsm_contour *c);
 
-/* One control cycle (feed, then one interpolator step). */
+/* One control cycle: lsm_contour_background, then lsm_contour_step (the host twin). */
 lsm_contour_result lsm_contour_cycle(lsm_contour *c);
+
+/* The background half of a cycle: feed one item (or finish), lsm_interp_prepare. Main loop. */
+lsm_contour_result lsm_contour_background(lsm_contour *c);
+
+/* The tick half of a cycle: one interpolator step, checksum, statistics, samples. Control tick. */
+lsm_contour_result lsm_contour_step(lsm_contour *c);
 
 /* Whether the last setpoint equals the end of the last item exactly (X Y Z; A B C stay 0). */
 bool lsm_contour_end_exact(const lsm_contour *c);

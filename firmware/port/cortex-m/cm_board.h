@@ -13,6 +13,7 @@
  *     inactive; on this demo board the input is NOT fail-safe (a real board wires a normally closed contact).
  *   - CAN: the MPS2 has no CAN controller. The port implements a loopback: every frame sent is queued and
  *     comes back through lsm_port_can_recv (8 frames deep). Enough to exercise a CAN node's code paths.
+ *   - UART: CMSDK APB UART 0 (cm_uart.h), QEMU's first -serial: the controller image's slcan link.
  *   - Output: ARM semihosting (cm_semihost.h): text to QEMU's stderr and an exit code for QEMU. On real
  *     hardware without a debugger a semihosting call faults: replace cm_semihost.c by a UART driver.
  * Memory: 4 MB code SSRAM at 0x0 (our "flash"), 4 MB data SSRAM at 0x20000000 (mps2_an386.ld).
@@ -51,6 +52,31 @@
 #define CM_TIMER0_RELOAD CM_REG32(0x40000008u)
 #define CM_TIMER_CTRL_EN 0x1u
 
+/* CMSDK APB UART 0 (0x40004000): RX interrupt = IRQ 0, TX interrupt = IRQ 1 (QEMU hw/arm/mps2.c); QEMU's
+ * first -serial is this UART. One-byte holding registers, no FIFO. */
+#define CM_UART0_DATA CM_REG32(0x40004000u)
+#define CM_UART0_STATE CM_REG32(0x40004004u)      /* bit 0 TX full, bit 1 RX full, bit 2/3 TX/RX overrun */
+#define CM_UART0_CTRL CM_REG32(0x40004008u)       /* bit 0 TX enable, 1 RX enable, 2 TX int, 3 RX int */
+#define CM_UART0_INTSTATUS CM_REG32(0x4000400Cu)  /* read: bit 0 TX, bit 1 RX; write 1 to clear */
+#define CM_UART0_BAUDDIV CM_REG32(0x40004010u)    /* >= 16 (QEMU refuses smaller dividers) */
+#define CM_UART_STATE_TXFULL 0x1u
+#define CM_UART_STATE_RXFULL 0x2u
+#define CM_UART_STATE_OVERRUNS 0xCu
+#define CM_UART_CTRL_TXEN 0x1u
+#define CM_UART_CTRL_RXEN 0x2u
+#define CM_UART_CTRL_TXINT 0x4u
+#define CM_UART_CTRL_RXINT 0x8u
+#define CM_UART_INT_TX 0x1u
+#define CM_UART_INT_RX 0x2u
+#define CM_IRQ_UART0_RX 0u
+#define CM_IRQ_UART0_TX 1u
+
+/* NVIC (ARMv7-M B3.4): enable, pend, priority (8 bits per IRQ, the M4 implements the top 3 here) */
+#define CM_NVIC_ISER0 CM_REG32(0xE000E100u)
+#define CM_NVIC_ICER0 CM_REG32(0xE000E180u)
+#define CM_NVIC_ISPR0 CM_REG32(0xE000E200u)
+#define CM_NVIC_IPR_BYTE(irq) (*(volatile uint8_t *)(uintptr_t)(0xE000E400u + (irq)))
+
 /* MPS2 FPGA I/O */
 #define CM_FPGAIO_LED0 CM_REG32(0x40028000u)
 #define CM_FPGAIO_BUTTON CM_REG32(0x40028008u)
@@ -69,6 +95,11 @@ static inline uint32_t cm_irq_save(void)
 static inline void cm_irq_restore(uint32_t primask)
 {
     __asm__ volatile("msr primask, %0" ::"r"(primask) : "memory");
+}
+
+static inline void cm_dmb(void)
+{
+    __asm__ volatile("dmb" ::: "memory");
 }
 
 static inline void cm_wfi(void)

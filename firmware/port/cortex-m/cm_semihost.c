@@ -2,6 +2,7 @@
 #include "cm_semihost.h"
 
 #define SEMI_SYS_WRITE0 0x04
+#define SEMI_SYS_GET_CMDLINE 0x15
 #define SEMI_SYS_EXIT_EXTENDED 0x20
 #define SEMI_ADP_STOPPED_APPLICATION_EXIT 0x20026u
 
@@ -24,4 +25,15 @@ void cm_semihost_exit(uint32_t code)
     (void)semi_call(SEMI_SYS_EXIT_EXTENDED, block);
     for (;;) {
     }
+}
+
+bool cm_semihost_cmdline(char *buf, uint32_t size)
+{
+    if (buf == NULL || size < 2u)
+        return false;
+    uint32_t block[2] = {(uint32_t)(uintptr_t)buf, size - 1u};
+    if (semi_call(SEMI_SYS_GET_CMDLINE, block) != 0)
+        return false;
+    buf[block[1] < size ? block[1] : size - 1u] = '\0';
+    return true;
 }

@@ -10,6 +10,7 @@
 #include "lsm_port.h"
 
 #include "cm_board.h"
+#include "cm_tick.h"
 
 #define CM_CAN_QUEUE 8u /* loopback depth; a power of two */
 
@@ -19,6 +20,13 @@ static struct {
     volatile lsm_port_tick_fn tick_fn;
     void *volatile tick_ctx;
     volatile uint32_t overruns;
+    uint32_t reload;                 /* SysTick reload value: period - 1 counts */
+    volatile uint32_t events;        /* tick events taken by the handler (wraps) */
+    volatile uint32_t worst_counts;  /* longest tick, from its timer event to the end of its function */
+    volatile uint32_t busy_counts;   /* sum of the handler's own durations (wraps) */
+    volatile bool in_wfi;            /* the main loop sleeps in cm_tick_idle */
+    volatile uint32_t work_overruns; /* ticks longer than a period from their event, sleep latency excluded */
+    volatile uint32_t late_wakes;    /* overruns of ticks that woke from cm_tick_idle and ran less than a period */
     /* microsecond clock: TIMER0 counts down at 25 MHz; us = acc_us + (elapsed counts) / 25 */
     uint32_t last_count;
     uint32_t acc_us;
@@ -43,6 +51,12 @@ lsm_status lsm_port_init(void)
     g_port.tick_fn = NULL;
     g_port.tick_ctx = NULL;
     g_port.overruns = 0u;
+    g_port.reload = 0u;
+    g_port.events = 0u;
+    g_port.worst_counts = 0u;
+    g_port.busy_counts = 0u;
+    g_port.work_overruns = 0u;
+    g_port.late_wakes = 0u;
     g_port.can_head = 0u;
     g_port.can_tail = 0u;
     g_port.up = true;
@@ -120,9 +134,16 @@ lsm_status lsm_port_gpio_write(lsm_gpio_out out, bool active)
 
 lsm_status lsm_port_tick_start(uint32_t period_us, lsm_port_tick_fn fn, void *ctx)
 {
+    if (period_us == 0u || period_us > (CM_SYST_MAX_RELOAD + 1u) / CM_SYSCLK_PER_US)
+        return fn == NULL ? LSM_E_NULL : LSM_E_ARG;
+    return cm_tick_start_counts(period_us * CM_SYSCLK_PER_US, fn, ctx);
+}
+
+lsm_status cm_tick_start_counts(uint32_t period_counts, lsm_port_tick_fn fn, void *ctx)
+{
     if (fn == NULL)
         return LSM_E_NULL;
-    if (period_us == 0u || period_us > (CM_SYST_MAX_RELOAD + 1u) / CM_SYSCLK_PER_US)
+    if (period_counts < 2u || period_counts > CM_SYST_MAX_RELOAD + 1u)
         return LSM_E_ARG;
     if (!g_port.up)
         return LSM_E_STATE;
@@ -130,11 +151,42 @@ lsm_status lsm_port_tick_start(uint32_t period_us, lsm_port_tick_fn fn, void *ct
     CM_SCB_ICSR = CM_SCB_ICSR_PENDSTCLR;
     g_port.tick_fn = fn;
     g_port.tick_ctx = ctx;
+    g_port.reload = period_counts - 1u;
     CM_SCB_SHPR3 = (CM_SCB_SHPR3 & 0x00FFFFFFu); /* SysTick at the highest configurable priority (0) */
-    CM_SYST_RVR = period_us * CM_SYSCLK_PER_US - 1u;
+    CM_SYST_RVR = period_counts - 1u;
     CM_SYST_CVR = 0u;
     CM_SYST_CSR = CM_SYST_CSR_ENABLE | CM_SYST_CSR_TICKINT | CM_SYST_CSR_CLKSOURCE;
     return LSM_OK;
+}
+
+void cm_tick_get_stats(cm_tick_stats *out)
+{
+    uint32_t irq = cm_irq_save();
+    out->ticks = g_port.events;
+    out->overruns = g_port.overruns;
+    out->work_overruns = g_port.work_overruns;
+    out->late_wakes = g_port.late_wakes;
+    out->worst_counts = g_port.worst_counts;
+    out->busy_counts = g_port.busy_counts;
+    cm_irq_restore(irq);
+}
+
+uint32_t cm_tick_now_counts(void)
+{
+    uint32_t irq = cm_irq_save();
+    uint32_t p1, p2, cvr;
+    do { /* a wrap between the reads would mix two periods: read until the pending bit is stable around CVR */
+        p1 = CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET;
+        cvr = CM_SYST_CVR;
+        p2 = CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET;
+    } while (p1 != p2);
+    /* the counter reads 0 at the event itself (then reloads): position 0 of the period that event starts, which
+     * the pending bit (or the handler's count) already includes */
+    const uint32_t events = g_port.events + (p2 != 0u ? 1u : 0u);
+    const uint32_t pos = cvr == 0u ? 0u : g_port.reload + 1u - cvr;
+    const uint32_t now = events * (g_port.reload + 1u) + pos;
+    cm_irq_restore(irq);
+    return now;
 }
 
 lsm_status lsm_port_tick_stop(void)
@@ -153,12 +205,37 @@ uint32_t lsm_port_tick_overruns(void)
 void SysTick_Handler(void);
 void SysTick_Handler(void)
 {
+    const uint32_t c0 = CM_SYST_CVR; /* counts left in this period when the handler starts */
     lsm_port_tick_fn fn = g_port.tick_fn;
+    g_port.events++;
     (void)lsm_port_time_us(); /* keeps the microsecond clock's wrap tracking fresh (it needs a call per 171 s) */
     if (fn != NULL)
         fn(g_port.tick_ctx);
-    if ((CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u)
+    const uint32_t c1 = CM_SYST_CVR;
+    /* counts elapsed in the period at entry and at the end (the counter reads 0 at the event itself, then reloads) */
+    const uint32_t period = g_port.reload + 1u;
+    const bool pending = (CM_SCB_ICSR & CM_SCB_ICSR_PENDSTSET) != 0u;
+    const uint32_t e0 = c0 == 0u ? 0u : period - c0;
+    const uint32_t e1 = c1 == 0u && pending ? 0u : period - c1;
+    /* a wrap during the handler: the pending bit, or the period position going back (QEMU updates the counter
+     * from its virtual clock at once, the pending bit when it next processes its timers) */
+    const bool late = pending || e1 < e0;
+    if (late)
         g_port.overruns++; /* the next tick fell due while this one ran: it starts late */
+    /* this handler's duration (one wrap at most is counted), and the tick's length from its timer event */
+    const uint32_t dur = late ? (period - e0) + e1 : e1 - e0;
+    /* latency: the counts between the timer event and the handler, unless the CPU slept (cm_tick_idle.h): a
+     * wake-up from WFI takes a few cycles on the chip, while under QEMU -icount sleep=on the time slept follows
+     * the host's clock and its scheduling delays */
+    const uint32_t latency = g_port.in_wfi ? 0u : e0;
+    const uint32_t since_event = latency + dur;
+    g_port.busy_counts += dur;
+    if (since_event > g_port.reload + 1u)
+        g_port.work_overruns++;
+    else if (late)
+        g_port.late_wakes++;
+    if (since_event > g_port.worst_counts)
+        g_port.worst_counts = since_event;
 }
 
 uint32_t lsm_port_time_us(void)
@@ -184,4 +261,11 @@ uint32_t lsm_port_time_us(void)
 void lsm_port_idle(void)
 {
     cm_wfi();
+}
+
+void cm_tick_idle(void)
+{
+    g_port.in_wfi = true;
+    cm_wfi();
+    g_port.in_wfi = false;
 }

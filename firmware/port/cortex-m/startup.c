@@ -6,7 +6,8 @@
  * HardFault prints the stacked PC, LR, xPSR and the fault status registers through semihosting and exits
  * with code 99; any other unexpected exception prints IPSR and exits with 98. The other configurable faults
  * (MemManage, BusFault, UsageFault) are left disabled, so they escalate to HardFault.
- * The vector table lists the 16 system exceptions and 32 device interrupts of mps2-an386 (none enabled).
+ * The vector table lists the 16 system exceptions and 32 device interrupts of mps2-an386 (only UART 0's are
+ * handled, by cm_uart.c, when an image enables them).
  */
 #include <stdint.h>
 
@@ -21,6 +22,8 @@ void HardFault_Handler(void);
 void Default_Handler(void);
 void cm_hardfault_report(const uint32_t *frame);
 void SysTick_Handler(void) __attribute__((weak, alias("Default_Handler")));
+void UART0RX_Handler(void) __attribute__((weak, alias("Default_Handler")));
+void UART0TX_Handler(void) __attribute__((weak, alias("Default_Handler")));
 
 void Reset_Handler(void)
 {
@@ -96,5 +99,7 @@ __attribute__((section(".isr_vector"), used)) const cm_vector cm_vectors[16 + CM
     0,                              /* 13: reserved */
     Default_Handler,                /* 14: PendSV */
     SysTick_Handler,                /* 15: SysTick (port_mps2.c) */
-    [16 ... 16 + CM_N_IRQ - 1] = Default_Handler,
+    UART0RX_Handler,                /* IRQ 0: UART 0 RX (cm_uart.c) */
+    UART0TX_Handler,                /* IRQ 1: UART 0 TX */
+    [16 + 2 ... 16 + CM_N_IRQ - 1] = Default_Handler,
 };

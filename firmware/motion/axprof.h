@@ -19,6 +19,16 @@
  * otherwise the coordinate stops (jerk-limited, with the new set-point's deceleration) and then starts the new
  * move from rest.
  *
+ * A stop or a retarget requested while the running move's jerk is not 0 (inside a jerk pulse of one of its
+ * four ramps) takes effect at the cycle where the move's jerk is back to 0 (the end of that ramp's jerk pulse:
+ * at most one acceleration ramp, A / J + pi J / (2 S) s, later; profile type 0: A / J + one cycle): until then the
+ * planned move runs on. Starting the stop from inside the pulse instead would first have to release the jerk
+ * in progress (jstop.h), which keeps the acceleration up for pi |j| / (2 S) longer than the plan (or, in a
+ * ramp-down, undoes it): the velocity then passes the profile velocity (up to 12 % on the HIL profile) and the
+ * acceleration its limit. From a state with j = 0 the stop's ramp down of a is no slower than the plan's (the
+ * stop's J and S are at least the plan's effective ones), so it never gains more velocity than the plan would:
+ * |v| <= V, |a| <= max(A, D) throughout (tests/motion/test_ppscan: every request cycle of a move).
+ *
  * Contexts: lsm_axprof_step runs in the control cycle. lsm_axprof_move and lsm_axprof_stop plan (a move plan
  * is ~100 k instructions on the M4, a stop a bisection): they are called where the set-point or the stop
  * request is taken, in the control cycle of the CiA 402 layer (motion.h). The generator is owned by one
@@ -61,7 +71,10 @@ typedef struct lsm_axprof {
     lsm_real origin_mm;      /* move start position */
     lsm_real target_mm;      /* move target */
     lsm_jstop stop;
-    bool have_after;         /* a move waits for the end of the stop (retarget) */
+    uint8_t defer;           /* a request waiting for the move's jerk to return to 0: AXPROF_DEFER_* (axprof.c) */
+    uint8_t defer_kind;      /* deferred stop: its kind */
+    lsm_jstop_limits defer_lim; /* deferred stop: its limits */
+    bool have_after;         /* a move waits for the end of the stop (retarget), or a deferred retarget */
     lsm_real after_target_mm;
     lsm_axprof_limits after_lim;
 } lsm_axprof;
@@ -74,8 +87,8 @@ void lsm_axprof_init(lsm_axprof *p, lsm_real cycle_s, lsm_real pos_mm);
  * Control cycle (the context that steps the generator). */
 lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_limits *lim);
 
-/* Starts a stop with these limits from the present state p->k, unless a stop at least as strong (kind)
- * already runs. Cancels a pending retarget. At rest (IDLE with v = a = 0): nothing. Returns LSM_OK or a
+/* Starts a stop with these limits from the present state p->k (inside a jerk pulse of a move: from the end of
+ * the pulse, see above), unless a stop at least as strong (kind) already runs. Cancels a pending retarget. At rest (IDLE with v = a = 0): nothing. Returns LSM_OK or a
  * lsm_jstop_plan error (then the state is held: it cannot happen with validated limits). Control cycle. */
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
 

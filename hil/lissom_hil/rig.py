@@ -433,6 +433,21 @@ class Rig:
         """Position demand 0x6062 in counts from home."""
         return self.read(0x6062, axis=axis) - self.home[axis]
 
+    def wait_demand(self, axis, mm, timeout=5.0, poll=0.002):
+        """Waits until the position demand 0x6062 has reached or passed `mm` (from home), in the direction from
+        the demand at the call towards `mm` (an event of the motion, not a wall-clock delay). Returns the demand
+        in counts from home."""
+        goal = int(round(mm * self.cpm(axis)))
+        sign = 1 if goal >= self.demand(axis) else -1
+        t_end = time.monotonic() + timeout
+        while True:
+            d = self.demand(axis)
+            if (d - goal) * sign >= 0:
+                return d
+            if time.monotonic() > t_end:
+                raise TimeoutError("axis %d demand %d counts: waited to pass %d" % (axis, d, goal))
+            time.sleep(poll)
+
     def actual(self, axis=0):
         """Position actual 0x6064 in counts from home."""
         return self.read(0x6064, axis=axis) - self.home[axis]

@@ -105,19 +105,23 @@ def test_pp_setpoints(rig):
     rig.controlword(0, 0x0F)
     rig.wait_sw(0, 0x1400, 0x0400, 10.0)
     assert rig.demand(0) == int(25 * cpm)
-    # change set immediately while moving: from a move to 100 mm, go to 30 mm instead
+    # change set immediately while moving: from a move to 100 mm, go to 30 mm instead. The request follows the
+    # demand passing 27 mm (inside the acceleration ramp, which covers ~8 mm; bus latency may move it later):
+    # a retarget at any cycle of the move must keep every limit (tests/motion/test_ppscan scans them all).
     rig.pp_move(0, 100.0, wait=False)
-    time.sleep(0.25)
+    rig.wait_demand(0, 27.0)
     rig.pp_move(0, 30.0)
     assert rig.demand(0) == int(30 * cpm)
     # halt (bit 8): jerk-limited stop with 0x6084, then the move resumes when halt is released
     rig.pp_move(0, 80.0, wait=False)
-    time.sleep(0.2)
+    rig.wait_demand(0, 33.0)  # inside the acceleration ramp, as above
     rig.controlword(0, 0x10F)
     rig.wait_sw(0, 0x0400, 0x0400, 5.0)  # target reached is also set when halted at rest
     held = rig.demand(0)
     assert int(30 * cpm) < held < int(80 * cpm)
-    time.sleep(0.1)
+    m = rig.frames.mark()  # held for at least one heartbeat period of the node (two heartbeats)
+    assert rig.wait_heartbeat(0x05, 2.0, m) is not None
+    assert rig.wait_heartbeat(0x05, 2.0, rig.frames.mark()) is not None
     assert rig.demand(0) == held
     rig.controlword(0, 0x0F)
     rig.wait_sw(0, 0x0400, 0x0000, 1.0)

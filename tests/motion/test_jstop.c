@@ -208,7 +208,7 @@ static void test_prof_move_and_stop(void **state)
         pj = p.k.j_mm_s3;
     }
     assert_true(p.k.s_mm < 100.0 && p.k.v_mm_s == 0);
-    /* a stop inside the first jerk phase of a move: the jerk is released, it never jumps (snap of the stop) */
+    /* a stop inside the first jerk phase of a move (it waits for the end of the pulse, axprof.h): the jerk never jumps */
     lsm_axprof_init(&p, 0.001, 0.0);
     assert_int_equal(lsm_axprof_move(&p, 100.0, &lim), LSM_OK);
     for (int i = 0; i < 12; i++)

@@ -418,6 +418,46 @@ static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const ls
     return LSM_OK;
 }
 
+/* Step 3a: the modal words that do not move (units, feed, plane, distance mode) into m; returns the line's linear
+ * unit (mm per unit). */
+static lsm_real exec_modal(const gc_words *w, lsm_gcode_modal *m)
+{
+    /* units first: every number on the line is read in the line's final units */
+    if (w->g[GRP_UNITS] >= 0)
+        m->units = w->g[GRP_UNITS] == 200 ? LSM_GCODE_UNITS_INCH : LSM_GCODE_UNITS_MM;
+    const lsm_real lin = m->units == LSM_GCODE_UNITS_INCH ? GC_MM_PER_INCH : LSM_R(1.0);
+
+    if (w->seen & BIT('F')) {
+        lsm_real f = w->val[LETTER('F')];
+        m->feed_mm_s = f * lin / LSM_R(60.0);
+        m->feed_rot_rad_s = f / LSM_R(60.0) * GC_DEG2RAD;
+    }
+    if (w->g[GRP_PLANE] >= 0)
+        m->plane = (lsm_gcode_plane)(w->g[GRP_PLANE] / 10);
+    if (w->g[GRP_DISTANCE] >= 0)
+        m->distance = w->g[GRP_DISTANCE] == 900 ? LSM_GCODE_ABSOLUTE : LSM_GCODE_INCREMENTAL;
+    return lin;
+}
+
+/* Step 3b: the end point of the line's motion (axis words in the line's units and distance mode), each within
+ * LSM_GCODE_MAX_ABS. */
+static lsm_status exec_end_point(const lsm_gcode *p, const gc_words *w, const lsm_gcode_modal *m, lsm_real lin,
+                                 lsm_real end[LSM_GCODE_N_AXES], lsm_gcode_result *res)
+{
+    for (int k = 0; k < LSM_GCODE_N_AXES; k++) {
+        char L = k_axis_letters[k];
+        if (!(w->seen & BIT(L)))
+            continue;
+        const bool rotary = k >= LSM_GCODE_A;
+        lsm_real v = w->val[LETTER(L)] * (rotary ? GC_DEG2RAD : lin);
+        end[k] = m->distance == LSM_GCODE_ABSOLUTE ? v : p->pos[k] + v;
+        lsm_real lim = (lsm_real)LSM_GCODE_MAX_ABS * (rotary ? GC_DEG2RAD : LSM_R(1.0));
+        if (lsm_fabs(end[k]) > lim)
+            return fail(res, LSM_E_GC_NUMBER_RANGE, w->col[LETTER(L)]);
+    }
+    return LSM_OK;
+}
+
 /* Step 3: execute the word table on a copy of the state; commit on success. */
 static lsm_status execute(lsm_gcode *p, const gc_words *w, lsm_gcode_result *res)
 {
@@ -425,21 +465,7 @@ static lsm_status execute(lsm_gcode *p, const gc_words *w, lsm_gcode_result *res
     lsm_real end[LSM_GCODE_N_AXES];
     for (int k = 0; k < LSM_GCODE_N_AXES; k++)
         end[k] = p->pos[k];
-
-    /* units first: every number on the line is read in the line's final units */
-    if (w->g[GRP_UNITS] >= 0)
-        m.units = w->g[GRP_UNITS] == 200 ? LSM_GCODE_UNITS_INCH : LSM_GCODE_UNITS_MM;
-    const lsm_real lin = m.units == LSM_GCODE_UNITS_INCH ? GC_MM_PER_INCH : LSM_R(1.0);
-
-    if (w->seen & BIT('F')) {
-        lsm_real f = w->val[LETTER('F')];
-        m.feed_mm_s = f * lin / LSM_R(60.0);
-        m.feed_rot_rad_s = f / LSM_R(60.0) * GC_DEG2RAD;
-    }
-    if (w->g[GRP_PLANE] >= 0)
-        m.plane = (lsm_gcode_plane)(w->g[GRP_PLANE] / 10);
-    if (w->g[GRP_DISTANCE] >= 0)
-        m.distance = w->g[GRP_DISTANCE] == 900 ? LSM_GCODE_ABSOLUTE : LSM_GCODE_INCREMENTAL;
+    const lsm_real lin = exec_modal(w, &m);
 
     const bool has_p = (w->seen & BIT('P')) != 0;
     const bool g64 = w->g[GRP_PATH] == 640;
@@ -489,18 +515,9 @@ static lsm_status execute(lsm_gcode *p, const gc_words *w, lsm_gcode_result *res
         m.blend_tol_mm = has_p ? w->val[LETTER('P')] * lin : LSM_R(0.0);
     }
 
-    /* end point */
-    for (int k = 0; k < LSM_GCODE_N_AXES; k++) {
-        char L = k_axis_letters[k];
-        if (!(w->seen & BIT(L)))
-            continue;
-        const bool rotary = k >= LSM_GCODE_A;
-        lsm_real v = w->val[LETTER(L)] * (rotary ? GC_DEG2RAD : lin);
-        end[k] = m.distance == LSM_GCODE_ABSOLUTE ? v : p->pos[k] + v;
-        lsm_real lim = (lsm_real)LSM_GCODE_MAX_ABS * (rotary ? GC_DEG2RAD : LSM_R(1.0));
-        if (lsm_fabs(end[k]) > lim)
-            return fail(res, LSM_E_GC_NUMBER_RANGE, w->col[LETTER(L)]);
-    }
+    lsm_status est = exec_end_point(p, w, &m, lin, end, res);
+    if (est != LSM_OK)
+        return est;
 
     lsm_gcode_block b = {0};
     bool emit = false;

@@ -68,14 +68,7 @@
 #include "lsm_config.h"
 #include "status.h"
 
-/* Largest turning bound Phi (rad) evaluated with the piecewise series; above it the Fresnel form. */
-#ifndef LSM_CLOTHOID_SERIES_PHASE_RAD
-#define LSM_CLOTHOID_SERIES_PHASE_RAD 32.0
-#endif
-/* Most Taylor terms per series (the sums stop earlier, at epsilon). */
-#ifndef LSM_CLOTHOID_MAX_TERMS
-#define LSM_CLOTHOID_MAX_TERMS 40
-#endif
+/* Compile-time settings (LSM_CLOTHOID_SERIES_PHASE_RAD, LSM_CLOTHOID_MAX_TERMS): lsm_config.h. */
 /* The small-step region of lsm_clothoid_local_fast (and of the stepper's usual step): |a + b/2| (the turning of
  * the step at its midpoint) and |b| (twice the turning that the sharpness adds), rad. Inside, a fixed polynomial is
  * accurate to better than eps/16 (float: 5.1e-9 at the corners, double: 4.9e-18; clothoid.c, docs/clothoid.md),
@@ -87,16 +80,8 @@
 #define LSM_CLOTHOID_FAST_PHI_RAD 0.02
 #define LSM_CLOTHOID_FAST_B_RAD 0.001
 #endif
-/* Fit: Newton iteration cap, and the largest turning (rad) a candidate may have. */
-#ifndef LSM_CLOTHOID_FIT_MAX_ITER
-#define LSM_CLOTHOID_FIT_MAX_ITER 40
-#endif
-#ifndef LSM_CLOTHOID_FIT_MAX_PHASE_RAD
-#define LSM_CLOTHOID_FIT_MAX_PHASE_RAD 25.0
-#endif
-#ifndef LSM_CLOTHOID_FIT_BRACKET_MAX_ITER
-#define LSM_CLOTHOID_FIT_BRACKET_MAX_ITER 170
-#endif
+/* Compile-time settings (LSM_CLOTHOID_FIT_MAX_ITER, LSM_CLOTHOID_FIT_MAX_PHASE_RAD,
+ * LSM_CLOTHOID_FIT_BRACKET_MAX_ITER): lsm_config.h. */
 
 /* A planar clothoid segment. */
 typedef struct lsm_clothoid {

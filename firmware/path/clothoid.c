@@ -353,8 +353,11 @@ static inline bool cl_series_regime(lsm_real k0, lsm_real c, lsm_real s)
     return phi <= (lsm_real)LSM_CLOTHOID_SERIES_PHASE_RAD;
 }
 
-void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy)
+void lsm_clothoid_integral(lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real s_mm,
+                           lsm_real *dx_mm, lsm_real *dy_mm)
 {
+    const lsm_real th0 = theta0_rad, k0 = kappa0_per_mm, c = c_per_mm2, s = s_mm;
+    lsm_real *const dx = dx_mm, *const dy = dy_mm;
     if (s == LSM_R(0.0)) {
         *dx = *dy = LSM_R(0.0);
         return;

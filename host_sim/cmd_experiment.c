@@ -495,6 +495,321 @@ static void write_csv(FILE *f)
     }
 }
 
+/* Defaults of the options. */
+#define EXP_DEFAULT_DISTANCE_MM 100.0 /* the paper's move */
+#define EXP_DEFAULT_BAND_MM 0.001     /* settled: within 1 um of the target */
+#define EXP_DEFAULT_WINDOW_S 0.3      /* the settle window after the setpoint reached the target */
+
+/* The command's options. */
+typedef struct {
+    double D, vff, aff, band, window, coulomb;
+    bool sweep, no_ff, json;
+    double fr[MAX_LIST], zr[MAX_LIST], bw[MAX_LIST], kv[MAX_LIST];
+    int nf, nz, nb, nk;
+    const char *feedback, *machine, *axis, *out;
+} exp_opts;
+
+/* Reads the options (0, or exit code 2 after a message). */
+static int exp_read(int argc, char **argv, exp_opts *o)
+{
+    cli_args a;
+    cli_init(&a, argc, argv);
+    o->D = EXP_DEFAULT_DISTANCE_MM;
+    o->vff = o->aff = o->coulomb = DNAN;
+    o->band = EXP_DEFAULT_BAND_MM;
+    o->window = EXP_DEFAULT_WINDOW_S;
+    if (cli_num(&a, "distance", &o->D) < 0 || cli_num(&a, "vff", &o->vff) < 0 || cli_num(&a, "aff", &o->aff) < 0 ||
+        cli_num(&a, "band", &o->band) < 0 || cli_num(&a, "settle-window", &o->window) < 0 ||
+        cli_num(&a, "coulomb", &o->coulomb) < 0)
+        return 2;
+    o->sweep = cli_flag(&a, "sweep");
+    o->no_ff = cli_flag(&a, "no-ff");
+    o->nf = list_opt(&a, "resonance-hz", o->fr, o->sweep);
+    o->nz = list_opt(&a, "damping", o->zr, o->sweep);
+    o->nb = list_opt(&a, "vel-bw-hz", o->bw, o->sweep);
+    o->nk = list_opt(&a, "kv", o->kv, o->sweep);
+    if (o->nf < 0 || o->nz < 0 || o->nb < 0 || o->nk < 0)
+        return 2;
+    o->feedback = cli_opt(&a, "feedback");
+    o->machine = cli_opt(&a, "machine");
+    o->axis = cli_opt(&a, "axis");
+    o->out = cli_opt(&a, "out");
+    o->json = cli_flag(&a, "json");
+    if (cli_check_unused(&a, "experiment kombarov"))
+        return 2;
+    return 0;
+}
+
+/* Checks the options' values and combinations (true, or false after a message). */
+static bool exp_check(const exp_opts *o)
+{
+    const char *err = NULL;
+    if (!(o->D > 0 && o->D <= 1000))
+        err = "--distance must be in (0, 1000] mm";
+    else if (!(o->band > 0 && isfinite(o->band)))
+        err = "--band must be a positive number of mm";
+    else if (!(o->window >= 0.01 && o->window <= 10))
+        err = "--settle-window must be in [0.01, 10] s";
+    else if (!isnan(o->coulomb) && !(o->coulomb >= 0 && o->coulomb <= 1e4))
+        err = "--coulomb must be in [0, 10000] N";
+    else if (o->no_ff && (!isnan(o->vff) || !isnan(o->aff)))
+        err = "--no-ff and --vff/--aff exclude each other";
+    if (err) {
+        fprintf(stderr, "error: %s\n", err);
+        return false;
+    }
+    if (o->feedback && strcmp(o->feedback, "load") != 0 && strcmp(o->feedback, "motor") != 0) {
+        fprintf(stderr, "error: --feedback must be load or motor (got %s)\n", o->feedback);
+        return false;
+    }
+    if (o->axis && !o->machine) {
+        fprintf(stderr, "error: --axis needs --machine\n");
+        return false;
+    }
+    if (o->sweep && o->out) {
+        fprintf(stderr, "error: --out writes one run; it cannot be combined with --sweep\n");
+        return false;
+    }
+    return check_list("resonance-hz", o->fr, o->nf, 0, 2000, true, false) &&
+           check_list("damping", o->zr, o->nz, 0, 1, false, true) &&
+           check_list("vel-bw-hz", o->bw, o->nb, 0, 1000, true, false) &&
+           check_list("kv", o->kv, o->nk, 0, 1000, true, false);
+}
+
+/* The drive: a machine file's axis, or the default drive with full feed-forward; then the options on top. */
+static int exp_drive(const exp_opts *o, config *cfg)
+{
+    if (o->machine) {
+        static sim_machine m;
+        char err[512];
+        if (sim_machine_load_file(o->machine, &m, err, sizeof err) != SIM_MACHINE_OK) {
+            fprintf(stderr, "error: %s\n", err);
+            return 2;
+        }
+        const char name = o->axis ? o->axis[0] : 'X';
+        const sim_machine_axis *ax = (o->axis && strlen(o->axis) != 1) ? NULL : sim_machine_axis_by_name(&m, name);
+        if (!ax) {
+            fprintf(stderr, "error: --axis: machine %s has no axis %s\n", m.name, o->axis ? o->axis : "X");
+            return 2;
+        }
+        if (ax->rotary) {
+            fprintf(stderr, "error: --axis: the experiment needs a linear axis (%c is rotary)\n", ax->name);
+            return 2;
+        }
+        cfg->dp = ax->drive;
+    } else {
+        sim_drive_params_default(&cfg->dp, false);
+        cfg->dp.vff_gain = 1;
+        cfg->dp.aff_gain = 1;
+    }
+    if (!isnan(o->coulomb))
+        cfg->dp.coulomb_N = o->coulomb;
+    if (o->feedback)
+        cfg->dp.motor_feedback = strcmp(o->feedback, "motor") == 0;
+    if (o->no_ff)
+        cfg->dp.vff_gain = cfg->dp.aff_gain = 0;
+    if (!isnan(o->vff))
+        cfg->dp.vff_gain = o->vff;
+    if (!isnan(o->aff))
+        cfg->dp.aff_gain = o->aff;
+    return 0;
+}
+
+/* The three profiles of the move (0, or an exit code after a message). */
+static int exp_profiles(const exp_opts *o)
+{
+    if (lissom_profile(&g_prof[0], o->D, K_SNAP_TEST1_MM_S4) || lissom_profile(&g_prof[1], o->D, K_SNAP_TEST2_MM_S4) ||
+        cjerk_profile(&g_prof[2], o->D)) {
+        fprintf(stderr, "error: experiment failed (move too long?)\n");
+        return 1;
+    }
+    for (int i = 0; i < 3; i++)
+        g_prof[i].name = k_names[i];
+    if (g_prof[0].n + o->window / CYCLE_S + 1 > MAX_CYCLES || g_prof[1].n + o->window / CYCLE_S + 1 > MAX_CYCLES) {
+        fprintf(stderr, "error: move plus settle window longer than %d cycles\n", MAX_CYCLES);
+        return 2;
+    }
+    return 0;
+}
+
+static void exp_single_json(const exp_opts *o, const config *cfg)
+{
+    const result *t = &g_res[0], *s = &g_res[1], *cj = &g_res[2];
+    printf("{\"distance_mm\":%.9g,\"vff_gain\":%.9g,\"aff_gain\":%.9g,\"band_mm\":%.9g,\"settle_window_s\":%.9g,"
+           "\"drive\":",
+           o->D, cfg->dp.vff_gain, cfg->dp.aff_gain, o->band, o->window);
+    print_drive_json(&cfg->dp);
+    printf(",\"profiles\":");
+    print_profiles_json(g_prof, g_res);
+    const double top[4] = {ratio(t->max_fe, s->max_fe), ratio(t->rms_fe, s->rms_fe), ratio(cj->max_fe, s->max_fe),
+                           ratio(cj->rms_fe, s->rms_fe)};
+    static const char *const top_k[4] = {"ratio_max", "ratio_rms", "ratio_max_cjerk", "ratio_rms_cjerk"};
+    for (int i = 0; i < 4; i++) {
+        printf(",\"%s\":", top_k[i]);
+        json_num(stdout, top[i]);
+    }
+    print_ratios_json(g_res);
+    printf("}\n");
+}
+
+static void exp_single_text(const exp_opts *o, const config *cfg)
+{
+    const result *t = &g_res[0], *s = &g_res[1], *cj = &g_res[2];
+    sim_drive_modes md;
+    sim_drive_modes_analytic(&cfg->dp, &md);
+    printf("Kombarov §5.2 on the simulated drive: %.1f mm, %g mm/s, %g mm/s2, %g mm/s3, vff %.2f, aff %.2f\n", o->D,
+           K_V_MAX_MM_S, K_A_MAX_MM_S2, K_J_MAX_MM_S3, cfg->dp.vff_gain, cfg->dp.aff_gain);
+    printf("  trapezoid = Table 1 Test 1 (snap %g mm/s4), sin2 = Test 2 (snap %g mm/s4), cjerk = Ruckig-like "
+           "time-optimal constant jerk\n",
+           K_SNAP_TEST1_MM_S4, K_SNAP_TEST2_MM_S4);
+    printf("  position loop on the %s\n", cfg->dp.motor_feedback ? "motor (semi-closed)" : "load (linear scale)");
+    printf("  drive: resonance %.1f Hz (zeta %.3f), anti-resonance %.1f Hz, velocity loop %.1f Hz, kv %g /s\n",
+           md.f_res_hz, md.zeta_res, md.f_antires_hz, vel_bw_hz(&cfg->dp), cfg->dp.kv_1_s);
+    printf("  error = setpoint - load position; residual = after the setpoint reached the target; band %g um\n",
+           1e3 * o->band);
+    printf("  %-10s %8s %11s %11s %11s %11s %9s\n", "profile", "time s", "max FE um", "RMS FE um", "resid um",
+           "spectral um", "settle ms");
+    for (int i = 0; i < 3; i++) {
+        const result *r = &g_res[i];
+        char st[32];
+        if (isfinite(r->settle_s))
+            snprintf(st, sizeof st, "%.0f", 1e3 * r->settle_s);
+        else
+            snprintf(st, sizeof st, ">%.0f", 1e3 * o->window);
+        printf("  %-10s %8.4f %11.3f %11.3f %11.3f %11.4f %9s\n", k_names[i], g_prof[i].duration_s, 1e3 * r->max_fe,
+               1e3 * r->rms_fe, 1e3 * r->resid_max, 1e3 * r->spec_res, st);
+    }
+    char b1[32], b2[32], b3[32];
+    fmt_ratio(b1, sizeof b1, ratio(t->resid_max, s->resid_max));
+    fmt_ratio(b2, sizeof b2, ratio(t->settle_s, s->settle_s));
+    fmt_ratio(b3, sizeof b3, ratio(cj->resid_max, s->resid_max));
+    printf("  trapezoid / sin2: max %.2fx, RMS %.2fx, residual %sx, settle %sx\n", t->max_fe / s->max_fe,
+           t->rms_fe / s->rms_fe, b1, b2);
+    printf("  cjerk / sin2:     max %.2fx, RMS %.2fx, residual %sx\n", cj->max_fe / s->max_fe, cj->rms_fe / s->rms_fe,
+           b3);
+}
+
+/* One run on one drive: the summary, and the setpoints and errors to --out. */
+static int exp_single(const exp_opts *o, config *cfg)
+{
+    apply(&cfg->dp, o->nf ? o->fr[0] : DNAN, o->nz ? o->zr[0] : DNAN, o->nb ? o->bw[0] : DNAN,
+          o->nk ? o->kv[0] : DNAN);
+    const int c = check_drive(&cfg->dp);
+    if (c < 0)
+        return 2;
+    if (c > 0) {
+        sim_drive_modes md;
+        sim_drive_modes_analytic(&cfg->dp, &md);
+        fprintf(stderr, "error: the drive does not settle in a closed-loop step test (resonance %.1f Hz, velocity "
+                        "loop %.1f Hz, kv %g /s): lower --vel-bw-hz or --kv, or raise --resonance-hz\n",
+                md.f_res_hz, vel_bw_hz(&cfg->dp), cfg->dp.kv_1_s);
+        return 1;
+    }
+    if (run_all(cfg)) {
+        fprintf(stderr, "error: experiment failed\n");
+        return 1;
+    }
+    if (o->json)
+        exp_single_json(o, cfg);
+    else
+        exp_single_text(o, cfg);
+    if (o->out) {
+        char path[4200];
+        FILE *f = cli_open_out(o->out, "kombarov.csv", path, sizeof path);
+        if (!f)
+            return 1;
+        write_csv(f);
+        fclose(f);
+    }
+    return 0;
+}
+
+/* One row of the sweep (the drive c, after the runs). */
+static void exp_sweep_row(const exp_opts *o, const config *c, double f_r, double zeta, bool stable, int row)
+{
+    const result *t = &g_res[0], *s = &g_res[1];
+    if (o->json) {
+        printf("%s{\"drive\":", row ? "," : "");
+        print_drive_json(&c->dp);
+        printf(",\"step_test_settled\":%s", stable ? "true" : "false");
+        printf(",\"profiles\":");
+        print_profiles_json(g_prof, g_res);
+        printf(",\"ratio_max\":");
+        json_num(stdout, ratio(t->max_fe, s->max_fe));
+        printf(",\"ratio_rms\":");
+        json_num(stdout, ratio(t->rms_fe, s->rms_fe));
+        printf(",\"ratio_max_cjerk\":");
+        json_num(stdout, ratio(g_res[2].max_fe, s->max_fe));
+        printf(",\"ratio_rms_cjerk\":");
+        json_num(stdout, ratio(g_res[2].rms_fe, s->rms_fe));
+        print_ratios_json(g_res);
+        printf("}");
+        return;
+    }
+    char r[5][32], u[2][32];
+    fmt_ratio(r[0], 32, ratio(t->max_fe, s->max_fe));
+    fmt_ratio(r[1], 32, ratio(t->rms_fe, s->rms_fe));
+    fmt_ratio(r[2], 32, ratio(t->resid_max, s->resid_max));
+    fmt_ratio(r[3], 32, ratio(t->settle_s, s->settle_s));
+    fmt_ratio(r[4], 32, ratio(t->spec_res, s->spec_res));
+    fmt_us(u[0], 32, t->resid_max);
+    fmt_us(u[1], 32, s->resid_max);
+    printf("  %6.1f %5.3f %6.1f %5.1f | %8.3f %8.3f | %7s %7s %7s %7s %7s | %8s %8s%s%s\n", f_r, zeta,
+           vel_bw_hz(&c->dp), c->dp.kv_1_s, 1e3 * t->max_fe, 1e3 * s->max_fe, r[0], r[1], r[2], r[3], r[4], u[0],
+           u[1], (t->limited || s->limited) ? " current limit" : "", stable ? "" : " step test fails");
+}
+
+/* The sweep over resonance, damping, velocity loop and kv (defaults: a grid of resonances and dampings). */
+static int exp_sweep(exp_opts *o, const config *cfg)
+{
+    static const double k_fr[] = {10, 15, 20, 30, 50, 75, 100, 150}, k_zr[] = {0.01, 0.02, 0.05, 0.1};
+    if (o->nf == 0) {
+        o->nf = (int)(sizeof k_fr / sizeof k_fr[0]);
+        memcpy(o->fr, k_fr, sizeof k_fr);
+    }
+    if (o->nz == 0) {
+        o->nz = (int)(sizeof k_zr / sizeof k_zr[0]);
+        memcpy(o->zr, k_zr, sizeof k_zr);
+    }
+    if (o->nb == 0) {
+        o->nb = 1;
+        o->bw[0] = DNAN;
+    }
+    if (o->nk == 0) {
+        o->nk = 1;
+        o->kv[0] = DNAN;
+    }
+    if (o->json) {
+        printf("{\"distance_mm\":%.9g,\"band_mm\":%.9g,\"settle_window_s\":%.9g,\"sweep\":[", o->D, o->band, o->window);
+    } else {
+        printf("Kombarov §5.2 sweep: %.1f mm, vff %.2f, aff %.2f, position loop on the %s; ratios trapezoid / sin2; "
+               "error = setpoint - load\n",
+               o->D, cfg->dp.vff_gain, cfg->dp.aff_gain, cfg->dp.motor_feedback ? "motor" : "load");
+        printf("  %6s %5s %6s %5s | %8s %8s | %7s %7s %7s %7s %7s | %8s %8s\n", "f_r Hz", "zeta", "vel Hz", "kv",
+               "max um", "sin2 um", "max", "RMS", "resid", "settle", "spect", "trap res", "sin2 res");
+    }
+    int row = 0;
+    for (int ib = 0; ib < o->nb; ib++)
+        for (int ik = 0; ik < o->nk; ik++)
+            for (int iz = 0; iz < o->nz; iz++)
+                for (int i_f = 0; i_f < o->nf; i_f++) {
+                    config c = *cfg;
+                    apply(&c.dp, o->fr[i_f], o->zr[iz], o->bw[ib], o->kv[ik]);
+                    const int chk = check_drive(&c.dp);
+                    if (chk < 0)
+                        return 2;
+                    if (run_all(&c)) {
+                        fprintf(stderr, "error: experiment failed\n");
+                        return 1;
+                    }
+                    exp_sweep_row(o, &c, o->fr[i_f], o->zr[iz], chk == 0, row);
+                    row++;
+                }
+    if (o->json)
+        printf("]}\n");
+    return 0;
+}
+
 int cmd_experiment(int argc, char **argv)
 {
     if (argc < 1 || strcmp(argv[0], "kombarov") != 0) {
@@ -503,267 +818,14 @@ int cmd_experiment(int argc, char **argv)
                         "[--kv 1/S] [--band MM] [--settle-window S] [--sweep] [--out DIR] [--json]\n");
         return 2;
     }
-    cli_args a;
-    cli_init(&a, argc - 1, argv + 1);
-    double D = 100, vff = DNAN, aff = DNAN, band = 0.001, window = 0.3, coulomb = DNAN;
-    if (cli_num(&a, "distance", &D) < 0 || cli_num(&a, "vff", &vff) < 0 || cli_num(&a, "aff", &aff) < 0 ||
-        cli_num(&a, "band", &band) < 0 || cli_num(&a, "settle-window", &window) < 0 ||
-        cli_num(&a, "coulomb", &coulomb) < 0)
+    static exp_opts o;
+    if (exp_read(argc - 1, argv + 1, &o) != 0 || !exp_check(&o))
         return 2;
-    const bool sweep = cli_flag(&a, "sweep");
-    const bool no_ff = cli_flag(&a, "no-ff");
-    double fr[MAX_LIST], zr[MAX_LIST], bw[MAX_LIST], kv[MAX_LIST];
-    int nf = list_opt(&a, "resonance-hz", fr, sweep), nz = list_opt(&a, "damping", zr, sweep);
-    int nb = list_opt(&a, "vel-bw-hz", bw, sweep), nk = list_opt(&a, "kv", kv, sweep);
-    if (nf < 0 || nz < 0 || nb < 0 || nk < 0)
-        return 2;
-    const char *feedback = cli_opt(&a, "feedback");
-    const char *machine = cli_opt(&a, "machine");
-    const char *axis = cli_opt(&a, "axis");
-    const char *out = cli_opt(&a, "out");
-    const bool json = cli_flag(&a, "json");
-    if (cli_check_unused(&a, "experiment kombarov"))
-        return 2;
-    if (!(D > 0 && D <= 1000)) {
-        fprintf(stderr, "error: --distance must be in (0, 1000] mm\n");
-        return 2;
-    }
-    if (!(band > 0 && isfinite(band))) {
-        fprintf(stderr, "error: --band must be a positive number of mm\n");
-        return 2;
-    }
-    if (!(window >= 0.01 && window <= 10)) {
-        fprintf(stderr, "error: --settle-window must be in [0.01, 10] s\n");
-        return 2;
-    }
-    if (!isnan(coulomb) && !(coulomb >= 0 && coulomb <= 1e4)) {
-        fprintf(stderr, "error: --coulomb must be in [0, 10000] N\n");
-        return 2;
-    }
-    if (no_ff && (!isnan(vff) || !isnan(aff))) {
-        fprintf(stderr, "error: --no-ff and --vff/--aff exclude each other\n");
-        return 2;
-    }
-    if (feedback && strcmp(feedback, "load") != 0 && strcmp(feedback, "motor") != 0) {
-        fprintf(stderr, "error: --feedback must be load or motor (got %s)\n", feedback);
-        return 2;
-    }
-    if (axis && !machine) {
-        fprintf(stderr, "error: --axis needs --machine\n");
-        return 2;
-    }
-    if (sweep && out) {
-        fprintf(stderr, "error: --out writes one run; it cannot be combined with --sweep\n");
-        return 2;
-    }
-    if (!check_list("resonance-hz", fr, nf, 0, 2000, true, false) || !check_list("damping", zr, nz, 0, 1, false, true) ||
-        !check_list("vel-bw-hz", bw, nb, 0, 1000, true, false) || !check_list("kv", kv, nk, 0, 1000, true, false))
-        return 2;
-
-    config cfg = {.D = D, .band = band, .window_s = window};
-    if (machine) {
-        static sim_machine m;
-        char err[512];
-        if (sim_machine_load_file(machine, &m, err, sizeof err) != SIM_MACHINE_OK) {
-            fprintf(stderr, "error: %s\n", err);
-            return 2;
-        }
-        const char name = axis ? axis[0] : 'X';
-        const sim_machine_axis *ax = (axis && strlen(axis) != 1) ? NULL : sim_machine_axis_by_name(&m, name);
-        if (!ax) {
-            fprintf(stderr, "error: --axis: machine %s has no axis %s\n", m.name, axis ? axis : "X");
-            return 2;
-        }
-        if (ax->rotary) {
-            fprintf(stderr, "error: --axis: the experiment needs a linear axis (%c is rotary)\n", ax->name);
-            return 2;
-        }
-        cfg.dp = ax->drive;
-    } else {
-        sim_drive_params_default(&cfg.dp, false);
-        cfg.dp.vff_gain = 1;
-        cfg.dp.aff_gain = 1;
-    }
-    if (!isnan(coulomb))
-        cfg.dp.coulomb_N = coulomb;
-    if (feedback)
-        cfg.dp.motor_feedback = strcmp(feedback, "motor") == 0;
-    if (no_ff)
-        cfg.dp.vff_gain = cfg.dp.aff_gain = 0;
-    if (!isnan(vff))
-        cfg.dp.vff_gain = vff;
-    if (!isnan(aff))
-        cfg.dp.aff_gain = aff;
-
-    if (lissom_profile(&g_prof[0], D, K_SNAP_TEST1_MM_S4) || lissom_profile(&g_prof[1], D, K_SNAP_TEST2_MM_S4) ||
-        cjerk_profile(&g_prof[2], D)) {
-        fprintf(stderr, "error: experiment failed (move too long?)\n");
-        return 1;
-    }
-    for (int i = 0; i < 3; i++)
-        g_prof[i].name = k_names[i];
-    if (g_prof[0].n + window / CYCLE_S + 1 > MAX_CYCLES || g_prof[1].n + window / CYCLE_S + 1 > MAX_CYCLES) {
-        fprintf(stderr, "error: move plus settle window longer than %d cycles\n", MAX_CYCLES);
-        return 2;
-    }
-
-    if (!sweep) {
-        apply(&cfg.dp, nf ? fr[0] : DNAN, nz ? zr[0] : DNAN, nb ? bw[0] : DNAN, nk ? kv[0] : DNAN);
-        const int c = check_drive(&cfg.dp);
-        if (c < 0)
-            return 2;
-        if (c > 0) {
-            sim_drive_modes md;
-            sim_drive_modes_analytic(&cfg.dp, &md);
-            fprintf(stderr, "error: the drive does not settle in a closed-loop step test (resonance %.1f Hz, velocity "
-                            "loop %.1f Hz, kv %g /s): lower --vel-bw-hz or --kv, or raise --resonance-hz\n",
-                    md.f_res_hz, vel_bw_hz(&cfg.dp), cfg.dp.kv_1_s);
-            return 1;
-        }
-        if (run_all(&cfg)) {
-            fprintf(stderr, "error: experiment failed\n");
-            return 1;
-        }
-        const result *t = &g_res[0], *s = &g_res[1], *cj = &g_res[2];
-        if (json) {
-            printf("{\"distance_mm\":%.9g,\"vff_gain\":%.9g,\"aff_gain\":%.9g,\"band_mm\":%.9g,\"settle_window_s\":%.9g,"
-                   "\"drive\":",
-                   D, cfg.dp.vff_gain, cfg.dp.aff_gain, band, window);
-            print_drive_json(&cfg.dp);
-            printf(",\"profiles\":");
-            print_profiles_json(g_prof, g_res);
-            const double top[4] = {ratio(t->max_fe, s->max_fe), ratio(t->rms_fe, s->rms_fe),
-                                   ratio(cj->max_fe, s->max_fe), ratio(cj->rms_fe, s->rms_fe)};
-            static const char *const top_k[4] = {"ratio_max", "ratio_rms", "ratio_max_cjerk", "ratio_rms_cjerk"};
-            for (int i = 0; i < 4; i++) {
-                printf(",\"%s\":", top_k[i]);
-                json_num(stdout, top[i]);
-            }
-            print_ratios_json(g_res);
-            printf("}\n");
-        } else {
-            sim_drive_modes md;
-            sim_drive_modes_analytic(&cfg.dp, &md);
-            printf("Kombarov §5.2 on the simulated drive: %.1f mm, %g mm/s, %g mm/s2, %g mm/s3, vff %.2f, aff %.2f\n", D,
-                   K_V_MAX_MM_S, K_A_MAX_MM_S2, K_J_MAX_MM_S3, cfg.dp.vff_gain, cfg.dp.aff_gain);
-            printf("  trapezoid = Table 1 Test 1 (snap %g mm/s4), sin2 = Test 2 (snap %g mm/s4), cjerk = Ruckig-like "
-                   "time-optimal constant jerk\n",
-                   K_SNAP_TEST1_MM_S4, K_SNAP_TEST2_MM_S4);
-            printf("  position loop on the %s\n", cfg.dp.motor_feedback ? "motor (semi-closed)" : "load (linear scale)");
-            printf("  drive: resonance %.1f Hz (zeta %.3f), anti-resonance %.1f Hz, velocity loop %.1f Hz, kv %g /s\n",
-                   md.f_res_hz, md.zeta_res, md.f_antires_hz, vel_bw_hz(&cfg.dp), cfg.dp.kv_1_s);
-            printf("  error = setpoint - load position; residual = after the setpoint reached the target; band %g um\n",
-                   1e3 * band);
-            printf("  %-10s %8s %11s %11s %11s %11s %9s\n", "profile", "time s", "max FE um", "RMS FE um", "resid um",
-                   "spectral um", "settle ms");
-            for (int i = 0; i < 3; i++) {
-                const result *r = &g_res[i];
-                char st[32];
-                if (isfinite(r->settle_s))
-                    snprintf(st, sizeof st, "%.0f", 1e3 * r->settle_s);
-                else
-                    snprintf(st, sizeof st, ">%.0f", 1e3 * window);
-                printf("  %-10s %8.4f %11.3f %11.3f %11.3f %11.4f %9s\n", k_names[i], g_prof[i].duration_s,
-                       1e3 * r->max_fe, 1e3 * r->rms_fe, 1e3 * r->resid_max, 1e3 * r->spec_res, st);
-            }
-            char b1[32], b2[32], b3[32];
-            fmt_ratio(b1, sizeof b1, ratio(t->resid_max, s->resid_max));
-            fmt_ratio(b2, sizeof b2, ratio(t->settle_s, s->settle_s));
-            fmt_ratio(b3, sizeof b3, ratio(cj->resid_max, s->resid_max));
-            printf("  trapezoid / sin2: max %.2fx, RMS %.2fx, residual %sx, settle %sx\n", t->max_fe / s->max_fe,
-                   t->rms_fe / s->rms_fe, b1, b2);
-            printf("  cjerk / sin2:     max %.2fx, RMS %.2fx, residual %sx\n", cj->max_fe / s->max_fe,
-                   cj->rms_fe / s->rms_fe, b3);
-        }
-        if (out) {
-            char path[4200];
-            FILE *f = cli_open_out(out, "kombarov.csv", path, sizeof path);
-            if (!f)
-                return 1;
-            write_csv(f);
-            fclose(f);
-        }
-        return 0;
-    }
-
-    /* sweep */
-    static const double k_fr[] = {10, 15, 20, 30, 50, 75, 100, 150}, k_zr[] = {0.01, 0.02, 0.05, 0.1};
-    if (nf == 0) {
-        nf = (int)(sizeof k_fr / sizeof k_fr[0]);
-        memcpy(fr, k_fr, sizeof k_fr);
-    }
-    if (nz == 0) {
-        nz = (int)(sizeof k_zr / sizeof k_zr[0]);
-        memcpy(zr, k_zr, sizeof k_zr);
-    }
-    if (nb == 0) {
-        nb = 1;
-        bw[0] = DNAN;
-    }
-    if (nk == 0) {
-        nk = 1;
-        kv[0] = DNAN;
-    }
-    if (json)
-        printf("{\"distance_mm\":%.9g,\"band_mm\":%.9g,\"settle_window_s\":%.9g,\"sweep\":[", D, band, window);
-    else {
-        printf("Kombarov §5.2 sweep: %.1f mm, vff %.2f, aff %.2f, position loop on the %s; ratios trapezoid / sin2; "
-               "error = setpoint - load\n",
-               D, cfg.dp.vff_gain, cfg.dp.aff_gain, cfg.dp.motor_feedback ? "motor" : "load");
-        printf("  %6s %5s %6s %5s | %8s %8s | %7s %7s %7s %7s %7s | %8s %8s\n", "f_r Hz", "zeta", "vel Hz", "kv",
-               "max um", "sin2 um", "max", "RMS", "resid", "settle", "spect", "trap res", "sin2 res");
-    }
-    int row = 0;
-    for (int ib = 0; ib < nb; ib++)
-        for (int ik = 0; ik < nk; ik++)
-            for (int iz = 0; iz < nz; iz++)
-                for (int i_f = 0; i_f < nf; i_f++) {
-                    config c = cfg;
-                    apply(&c.dp, fr[i_f], zr[iz], bw[ib], kv[ik]);
-                    const int chk = check_drive(&c.dp);
-                    if (chk < 0)
-                        return 2;
-                    const bool stable = chk == 0;
-                    if (run_all(&c)) {
-                        fprintf(stderr, "error: experiment failed\n");
-                        return 1;
-                    }
-                    const result *t = &g_res[0], *s = &g_res[1];
-                    if (json) {
-                        printf("%s{\"drive\":", row ? "," : "");
-                        print_drive_json(&c.dp);
-                        printf(",\"step_test_settled\":%s", stable ? "true" : "false");
-                        printf(",\"profiles\":");
-                        print_profiles_json(g_prof, g_res);
-                        printf(",\"ratio_max\":");
-                        json_num(stdout, ratio(t->max_fe, s->max_fe));
-                        printf(",\"ratio_rms\":");
-                        json_num(stdout, ratio(t->rms_fe, s->rms_fe));
-                        printf(",\"ratio_max_cjerk\":");
-                        json_num(stdout, ratio(g_res[2].max_fe, s->max_fe));
-                        printf(",\"ratio_rms_cjerk\":");
-                        json_num(stdout, ratio(g_res[2].rms_fe, s->rms_fe));
-                        print_ratios_json(g_res);
-                        printf("}");
-                    } else {
-                        {
-                            char r[5][32], u[2][32];
-                            fmt_ratio(r[0], 32, ratio(t->max_fe, s->max_fe));
-                            fmt_ratio(r[1], 32, ratio(t->rms_fe, s->rms_fe));
-                            fmt_ratio(r[2], 32, ratio(t->resid_max, s->resid_max));
-                            fmt_ratio(r[3], 32, ratio(t->settle_s, s->settle_s));
-                            fmt_ratio(r[4], 32, ratio(t->spec_res, s->spec_res));
-                            fmt_us(u[0], 32, t->resid_max);
-                            fmt_us(u[1], 32, s->resid_max);
-                            printf("  %6.1f %5.3f %6.1f %5.1f | %8.3f %8.3f | %7s %7s %7s %7s %7s | %8s %8s%s%s\n",
-                                   fr[i_f], zr[iz], vel_bw_hz(&c.dp), c.dp.kv_1_s, 1e3 * t->max_fe, 1e3 * s->max_fe,
-                                   r[0], r[1], r[2], r[3], r[4], u[0], u[1],
-                                   (t->limited || s->limited) ? " current limit" : "", stable ? "" : " step test fails");
-                        }
-                    }
-                    row++;
-                }
-    if (json)
-        printf("]}\n");
-    return 0;
+    config cfg = {.D = o.D, .band = o.band, .window_s = o.window};
+    int rc = exp_drive(&o, &cfg);
+    if (rc == 0)
+        rc = exp_profiles(&o);
+    if (rc != 0)
+        return rc;
+    return o.sweep ? exp_sweep(&o, &cfg) : exp_single(&o, &cfg);
 }

@@ -310,32 +310,210 @@ static void sm_num(const char *key, double v, int *first)
     *first = 0;
 }
 
-int cmd_smooth(int argc, char **argv)
+/* The run's options. */
+typedef struct {
+    const char *path;
+    double eps, amax, jmax;
+    bool json;
+} sm_opts;
+
+/* What the whole program came to. */
+typedef struct {
+    int n_smooth, n_join, n_stop;
+    double max_dev, max_dev_s, kmax, cmax;
+    sm_joint jt;
+} sm_totals;
+
+/* Options; returns 0, or the exit code of a usage (2) or value (1) error. */
+static int sm_parse(int argc, char **argv, sm_opts *o)
 {
     cli_args a;
     cli_init(&a, argc, argv);
-    const char *path = cli_opt(&a, "gcode");
-    double eps, amax = 50.0, jmax = 500.0;
-    if (cli_num_req(&a, "tolerance", &eps) || cli_num(&a, "amax", &amax) < 0 || cli_num(&a, "jmax", &jmax) < 0)
+    o->path = cli_opt(&a, "gcode");
+    o->amax = 50.0;
+    o->jmax = 500.0;
+    if (cli_num_req(&a, "tolerance", &o->eps) || cli_num(&a, "amax", &o->amax) < 0 ||
+        cli_num(&a, "jmax", &o->jmax) < 0)
         return 2;
-    const bool json = cli_flag(&a, "json");
+    o->json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "smooth"))
         return 2;
-    if (path == NULL || *path == '\0') {
+    if (o->path == NULL || *o->path == '\0') {
         fprintf(stderr, "error: smooth: --gcode FILE is required\n");
         return 2;
     }
-    if (!(isfinite(eps) && eps > 0.0)) {
+    if (!(isfinite(o->eps) && o->eps > 0.0)) {
         fprintf(stderr, "error: smooth: --tolerance must be a finite number > 0\n");
         return 1;
     }
-    if (!(isfinite(amax) && amax > 0.0 && isfinite(jmax) && jmax > 0.0)) {
+    if (!(isfinite(o->amax) && o->amax > 0.0 && isfinite(o->jmax) && o->jmax > 0.0)) {
         fprintf(stderr, "error: smooth: --amax and --jmax must be finite numbers > 0\n");
         return 1;
     }
+    return 0;
+}
+
+/* The corner between blocks p and q: smoothed (status 0), joined (1: nothing to smooth) or a stop (2, reason). */
+static void sm_smooth_one(const sm_block *p, const sm_block *q, const lsm_corner_params *prm, sm_corner *k,
+                          sm_totals *t)
+{
+    if (!p->feed || !q->feed) {
+        k->status = 2;
+        k->reason = "rapid";
+    } else if (p->stop_end) {
+        k->status = 2;
+        k->reason = "G61 exact stop";
+    } else if (p->rotary || q->rotary) {
+        k->status = 2;
+        k->reason = lsm_status_str(LSM_E_ROTARY);
+    } else {
+        lsm_status st = lsm_corner_smooth(&p->g, &q->g, prm, &k->r);
+        if (st == LSM_OK) {
+            k->status = 0;
+            k->dev_sampled = sm_sampled_deviation(&p->g, &q->g, &k->r);
+            if (k->r.deviation_mm > t->max_dev)
+                t->max_dev = k->r.deviation_mm;
+            if (k->dev_sampled > t->max_dev_s)
+                t->max_dev_s = k->dev_sampled;
+            if (k->r.kappa_max_per_mm > t->kmax)
+                t->kmax = k->r.kappa_max_per_mm;
+            if (k->r.sharpness_max_per_mm2 > t->cmax)
+                t->cmax = k->r.sharpness_max_per_mm2;
+        } else if (st == LSM_E_COLLINEAR) {
+            k->status = 1;
+        } else {
+            k->status = 2;
+            k->reason = lsm_status_str(st);
+        }
+    }
+    t->n_smooth += k->status == 0;
+    t->n_join += k->status == 1;
+    t->n_stop += k->status == 2;
+}
+
+/* The smoothed path: every block trimmed by its corners (and the arcs' curvature counted). Returns 0 or 1 (error
+ * printed). */
+static int sm_trim_blocks(sm_block *b, int n, const sm_corner *c, sm_totals *t)
+{
+    for (int i = 0; i < n; i++) {
+        lsm_geom g = b[i].g;
+        const double tb = (i > 0 && c[i - 1].status == 0) ? c[i - 1].r.trim2_mm : 0.0;
+        const double ta = (i + 1 < n && c[i].status == 0) ? c[i].r.trim1_mm : 0.0;
+        if (lsm_geom_trim_start(&g, tb) != LSM_OK || lsm_geom_trim_end(&g, ta) != LSM_OK) {
+            fprintf(stderr, "error: smooth: block at line %u: trims exceed its length\n", (unsigned)b[i].line);
+            return 1;
+        }
+        b[i].g = g;
+        if (g.kind == LSM_GEOM_ARC && b[i].feed) {
+            const double ka = lsm_geom_kappa(&g, 0.0);
+            if (ka > t->kmax)
+                t->kmax = ka;
+        }
+    }
+    return 0;
+}
+
+/* Every joint the machine passes without stopping, after smoothing. */
+static void sm_check_joints(const sm_block *b, int n, const sm_corner *c, sm_joint *jt)
+{
+    for (int i = 0; i + 1 < n; i++) {
+        if (c[i].status == 0) {
+            sm_joint_check(&b[i].g, &c[i].r.trans[0], jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+            sm_joint_check(&c[i].r.trans[0], &c[i].r.trans[1], jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+            sm_joint_check(&c[i].r.trans[1], &b[i + 1].g, jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
+        } else if (c[i].status == 1) {
+            sm_joint_check(&b[i].g, &b[i + 1].g, jt, b[i + 1].line, 0.0);
+        }
+    }
+}
+
+static void sm_print_corner_json(const sm_opts *o, const sm_corner *k, int i, uint32_t line)
+{
+    static const char *names[3] = {"smoothed", "joined", "stop"};
+    printf("%s{\"index\": %d, \"line\": %u, \"status\": \"%s\"", i ? ", " : "", i, (unsigned)line, names[k->status]);
+    if (k->status == 2)
+        printf(", \"reason\": \"%s\"", k->reason);
+    if (k->status == 0) {
+        const lsm_corner_result *r = &k->r;
+        int f = 0;
+        sm_num("deviation", r->deviation_mm, &f);
+        sm_num("vertex_deviation", r->vertex_dev_mm, &f);
+        sm_num("path_deviation", r->path_dev_mm, &f);
+        sm_num("deviation_sampled", k->dev_sampled, &f);
+        sm_num("kappa_max", r->kappa_max_per_mm, &f);
+        sm_num("sharpness_max", r->sharpness_max_per_mm2, &f);
+        sm_num("trim_before", r->trim1_mm, &f);
+        sm_num("trim_after", r->trim2_mm, &f);
+        sm_num("angle_deg", r->delta_rad * 180.0 / LSM_PI, &f);
+        sm_num("feed_limit_eq7_mm_s", r->kappa_max_per_mm > 0 ? sqrt(o->amax / r->kappa_max_per_mm) : HUGE_VAL, &f);
+        sm_num("feed_limit_eq8_mm_s", r->sharpness_max_per_mm2 > 0 ? cbrt(o->jmax / r->sharpness_max_per_mm2) : HUGE_VAL,
+               &f);
+        printf(", \"iterations\": %u, \"scales\": %u, \"limited\": %s, \"closed_form\": %s", (unsigned)r->iterations,
+               (unsigned)r->scales, r->limited ? "true" : "false", r->closed_form ? "true" : "false");
+    }
+    printf("}");
+}
+
+static void sm_print_json(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t,
+                          double f7, double f8)
+{
+    int first = 1;
+    printf("{");
+    sm_num("tolerance", o->eps, &first);
+    printf(", \"blocks\": %d, \"smoothed\": %d, \"joined\": %d, \"stops\": %d, \"corners\": [", n, t->n_smooth,
+           t->n_join, t->n_stop);
+    for (int i = 0; i + 1 < n; i++)
+        sm_print_corner_json(o, &c[i], i, b[i + 1].line);
+    printf("]");
+    sm_num("max_deviation", t->max_dev, &first);
+    sm_num("max_deviation_sampled", t->max_dev_s, &first);
+    sm_num("max_curvature_jump", t->jt.curv, &first);
+    sm_num("max_curvature_jump_rel", t->jt.curv_rel, &first);
+    sm_num("max_position_gap", t->jt.gap, &first);
+    sm_num("max_tangent_jump_rad", t->jt.tan, &first);
+    sm_num("kappa_max", t->kmax, &first);
+    sm_num("sharpness_max", t->cmax, &first);
+    sm_num("amax", o->amax, &first);
+    sm_num("jmax", o->jmax, &first);
+    sm_num("feed_limit_eq7_mm_s", f7, &first);
+    sm_num("feed_limit_eq8_mm_s", f8, &first);
+    sm_num("feed_limit_mm_s", f7 < f8 ? f7 : f8, &first);
+    sm_num("feed_limit_eq7_mm_min", 60.0 * f7, &first);
+    sm_num("feed_limit_eq8_mm_min", 60.0 * f8, &first);
+    printf("}\n");
+}
+
+static void sm_print_text(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t,
+                          double f7, double f8)
+{
+    printf("%d blocks, %d corners: %d smoothed, %d joined, %d stops (tolerance %g mm)\n", n, n > 0 ? n - 1 : 0,
+           t->n_smooth, t->n_join, t->n_stop, o->eps);
+    for (int i = 0; i + 1 < n; i++) {
+        const sm_corner *k = &c[i];
+        if (k->status == 0)
+            printf("  line %4u  %7.2f deg  dev %.6f mm (sampled %.6f)  kappa_max %.5g/mm  c_max %.5g/mm^2%s\n",
+                   (unsigned)b[i + 1].line, k->r.delta_rad * 180.0 / LSM_PI, k->r.deviation_mm, k->dev_sampled,
+                   k->r.kappa_max_per_mm, k->r.sharpness_max_per_mm2, k->r.limited ? "  (trim-limited)" : "");
+        else if (k->status == 2)
+            printf("  line %4u  stop: %s\n", (unsigned)b[i + 1].line, k->reason);
+    }
+    const sm_joint *jt = &t->jt;
+    printf("max deviation %.6g mm (sampled %.6g), max curvature jump %.3g 1/mm (relative %.3g, at line %u; gap %.3g mm,"
+           " tangent %.3g rad)\n",
+           t->max_dev, t->max_dev_s, jt->curv, jt->curv_rel, (unsigned)jt->worst_line, jt->gap, jt->tan);
+    printf("kappa_max %.6g 1/mm, c_max %.6g 1/mm^2: feed limits eq 7 %.1f mm/min, eq 8 %.1f mm/min\n", t->kmax,
+           t->cmax, 60.0 * f7, 60.0 * f8);
+}
+
+int cmd_smooth(int argc, char **argv)
+{
+    sm_opts o;
+    const int pr = sm_parse(argc, argv, &o);
+    if (pr != 0)
+        return pr;
     sm_block *b = NULL;
     int n = 0;
-    if (sm_read_gcode(path, &b, &n) != 0)
+    if (sm_read_gcode(o.path, &b, &n) != 0)
         return 1;
     sm_corner *c = n > 1 ? calloc((size_t)(n - 1), sizeof *c) : NULL;
     if (n > 1 && c == NULL) {
@@ -343,142 +521,22 @@ int cmd_smooth(int argc, char **argv)
         fprintf(stderr, "error: smooth: out of memory\n");
         return 1;
     }
-    const lsm_corner_params prm = {eps, 0.0, 0.0};
-    int n_smooth = 0, n_join = 0, n_stop = 0;
-    double max_dev = 0.0, max_dev_s = 0.0, kmax = 0.0, cmax = 0.0;
-    for (int i = 0; i + 1 < n; i++) {
-        sm_corner *k = &c[i];
-        const sm_block *p = &b[i], *q = &b[i + 1];
-        if (!p->feed || !q->feed) {
-            k->status = 2;
-            k->reason = "rapid";
-        } else if (p->stop_end) {
-            k->status = 2;
-            k->reason = "G61 exact stop";
-        } else if (p->rotary || q->rotary) {
-            k->status = 2;
-            k->reason = lsm_status_str(LSM_E_ROTARY);
-        } else {
-            lsm_status st = lsm_corner_smooth(&p->g, &q->g, &prm, &k->r);
-            if (st == LSM_OK) {
-                k->status = 0;
-                k->dev_sampled = sm_sampled_deviation(&p->g, &q->g, &k->r);
-                if (k->r.deviation_mm > max_dev)
-                    max_dev = k->r.deviation_mm;
-                if (k->dev_sampled > max_dev_s)
-                    max_dev_s = k->dev_sampled;
-                if (k->r.kappa_max_per_mm > kmax)
-                    kmax = k->r.kappa_max_per_mm;
-                if (k->r.sharpness_max_per_mm2 > cmax)
-                    cmax = k->r.sharpness_max_per_mm2;
-            } else if (st == LSM_E_COLLINEAR) {
-                k->status = 1;
-            } else {
-                k->status = 2;
-                k->reason = lsm_status_str(st);
-            }
-        }
-        n_smooth += k->status == 0;
-        n_join += k->status == 1;
-        n_stop += k->status == 2;
+    const lsm_corner_params prm = {o.eps, 0.0, 0.0};
+    sm_totals t = {0, 0, 0, 0.0, 0.0, 0.0, 0.0, {0, 0, 0, 0, 0}};
+    for (int i = 0; i + 1 < n; i++)
+        sm_smooth_one(&b[i], &b[i + 1], &prm, &c[i], &t);
+    if (sm_trim_blocks(b, n, c, &t) != 0) {
+        free(b);
+        free(c);
+        return 1;
     }
-    /* the smoothed path: trim the blocks, then check every joint passed without stopping */
-    sm_joint jt = {0, 0, 0, 0, 0};
-    for (int i = 0; i < n; i++) {
-        lsm_geom g = b[i].g;
-        const double tb = (i > 0 && c[i - 1].status == 0) ? c[i - 1].r.trim2_mm : 0.0;
-        const double ta = (i + 1 < n && c[i].status == 0) ? c[i].r.trim1_mm : 0.0;
-        if (lsm_geom_trim_start(&g, tb) != LSM_OK || lsm_geom_trim_end(&g, ta) != LSM_OK) {
-            fprintf(stderr, "error: smooth: block at line %u: trims exceed its length\n", (unsigned)b[i].line);
-            free(b);
-            free(c);
-            return 1;
-        }
-        b[i].g = g;
-        if (g.kind == LSM_GEOM_ARC && b[i].feed) {
-            const double ka = lsm_geom_kappa(&g, 0.0);
-            if (ka > kmax)
-                kmax = ka;
-        }
-    }
-    for (int i = 0; i + 1 < n; i++) {
-        if (c[i].status == 0) {
-            sm_joint_check(&b[i].g, &c[i].r.trans[0], &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
-            sm_joint_check(&c[i].r.trans[0], &c[i].r.trans[1], &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
-            sm_joint_check(&c[i].r.trans[1], &b[i + 1].g, &jt, b[i + 1].line, c[i].r.kappa_max_per_mm);
-        } else if (c[i].status == 1) {
-            sm_joint_check(&b[i].g, &b[i + 1].g, &jt, b[i + 1].line, 0.0);
-        }
-    }
-    const double f7 = kmax > 0.0 ? sqrt(amax / kmax) : HUGE_VAL;
-    const double f8 = cmax > 0.0 ? cbrt(jmax / cmax) : HUGE_VAL;
-    if (json) {
-        int first = 1;
-        printf("{");
-        sm_num("tolerance", eps, &first);
-        printf(", \"blocks\": %d, \"smoothed\": %d, \"joined\": %d, \"stops\": %d, \"corners\": [", n, n_smooth, n_join,
-               n_stop);
-        for (int i = 0; i + 1 < n; i++) {
-            const sm_corner *k = &c[i];
-            static const char *names[3] = {"smoothed", "joined", "stop"};
-            printf("%s{\"index\": %d, \"line\": %u, \"status\": \"%s\"", i ? ", " : "", i, (unsigned)b[i + 1].line,
-                   names[k->status]);
-            if (k->status == 2)
-                printf(", \"reason\": \"%s\"", k->reason);
-            if (k->status == 0) {
-                const lsm_corner_result *r = &k->r;
-                int f = 0;
-                sm_num("deviation", r->deviation_mm, &f);
-                sm_num("vertex_deviation", r->vertex_dev_mm, &f);
-                sm_num("path_deviation", r->path_dev_mm, &f);
-                sm_num("deviation_sampled", k->dev_sampled, &f);
-                sm_num("kappa_max", r->kappa_max_per_mm, &f);
-                sm_num("sharpness_max", r->sharpness_max_per_mm2, &f);
-                sm_num("trim_before", r->trim1_mm, &f);
-                sm_num("trim_after", r->trim2_mm, &f);
-                sm_num("angle_deg", r->delta_rad * 180.0 / LSM_PI, &f);
-                sm_num("feed_limit_eq7_mm_s", r->kappa_max_per_mm > 0 ? sqrt(amax / r->kappa_max_per_mm) : HUGE_VAL, &f);
-                sm_num("feed_limit_eq8_mm_s",
-                       r->sharpness_max_per_mm2 > 0 ? cbrt(jmax / r->sharpness_max_per_mm2) : HUGE_VAL, &f);
-                printf(", \"iterations\": %u, \"scales\": %u, \"limited\": %s, \"closed_form\": %s", (unsigned)r->iterations,
-                       (unsigned)r->scales, r->limited ? "true" : "false", r->closed_form ? "true" : "false");
-            }
-            printf("}");
-        }
-        printf("]");
-        sm_num("max_deviation", max_dev, &first);
-        sm_num("max_deviation_sampled", max_dev_s, &first);
-        sm_num("max_curvature_jump", jt.curv, &first);
-        sm_num("max_curvature_jump_rel", jt.curv_rel, &first);
-        sm_num("max_position_gap", jt.gap, &first);
-        sm_num("max_tangent_jump_rad", jt.tan, &first);
-        sm_num("kappa_max", kmax, &first);
-        sm_num("sharpness_max", cmax, &first);
-        sm_num("amax", amax, &first);
-        sm_num("jmax", jmax, &first);
-        sm_num("feed_limit_eq7_mm_s", f7, &first);
-        sm_num("feed_limit_eq8_mm_s", f8, &first);
-        sm_num("feed_limit_mm_s", f7 < f8 ? f7 : f8, &first);
-        sm_num("feed_limit_eq7_mm_min", 60.0 * f7, &first);
-        sm_num("feed_limit_eq8_mm_min", 60.0 * f8, &first);
-        printf("}\n");
-    } else {
-        printf("%d blocks, %d corners: %d smoothed, %d joined, %d stops (tolerance %g mm)\n", n, n > 0 ? n - 1 : 0,
-               n_smooth, n_join, n_stop, eps);
-        for (int i = 0; i + 1 < n; i++) {
-            const sm_corner *k = &c[i];
-            if (k->status == 0)
-                printf("  line %4u  %7.2f deg  dev %.6f mm (sampled %.6f)  kappa_max %.5g/mm  c_max %.5g/mm^2%s\n",
-                       (unsigned)b[i + 1].line, k->r.delta_rad * 180.0 / LSM_PI, k->r.deviation_mm, k->dev_sampled,
-                       k->r.kappa_max_per_mm, k->r.sharpness_max_per_mm2, k->r.limited ? "  (trim-limited)" : "");
-            else if (k->status == 2)
-                printf("  line %4u  stop: %s\n", (unsigned)b[i + 1].line, k->reason);
-        }
-        printf("max deviation %.6g mm (sampled %.6g), max curvature jump %.3g 1/mm (relative %.3g, at line %u; gap %.3g mm,"
-               " tangent %.3g rad)\n", max_dev, max_dev_s, jt.curv, jt.curv_rel, (unsigned)jt.worst_line, jt.gap, jt.tan);
-        printf("kappa_max %.6g 1/mm, c_max %.6g 1/mm^2: feed limits eq 7 %.1f mm/min, eq 8 %.1f mm/min\n", kmax, cmax,
-               60.0 * f7, 60.0 * f8);
-    }
+    sm_check_joints(b, n, c, &t.jt);
+    const double f7 = t.kmax > 0.0 ? sqrt(o.amax / t.kmax) : HUGE_VAL;
+    const double f8 = t.cmax > 0.0 ? cbrt(o.jmax / t.cmax) : HUGE_VAL;
+    if (o.json)
+        sm_print_json(&o, b, n, c, &t, f7, f8);
+    else
+        sm_print_text(&o, b, n, c, &t, f7, f8);
     free(b);
     free(c);
     return 0;

@@ -800,6 +800,175 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
     free(ratio);
 }
 
+/* The Hermite table of the path (gpath). */
+#define VP_TAB_STEP_MM 0.004      /* node spacing: the table is within 6e-10 mm of the exact clothoids */
+#define VP_TAB_MAX_NODES 2e6      /* coarser steps on long paths, so that the table stays about 2e6 nodes */
+#define VP_TAB_MAX_TURN_RAD 0.02  /* and at most this turning per interval (tiny, tight clothoids) */
+#define VP_TAB_MAX_INTERVALS 1e6  /* per block */
+#define VP_DEFAULT_MAX_TIME_S 3600.0 /* VPOp's motion is cut off after this (unless --max-time says otherwise) */
+
+/* The block of gp that holds arc length s (binary search on the block starts). */
+static size_t vp_block_at(const gpath *gp, double s)
+{
+    size_t lo = 0, hi = gp->n;
+    while (hi - lo > 1) {
+        const size_t mid = (lo + hi) / 2;
+        if (gp->s0[mid] <= s)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The program through the look-ahead planner (its geometry: lines, arcs, corner clothoids; VPOp then plans the
+ * motion along it). Returns 0, or -1 with r->err set. */
+static int vp_plan_geometry(lsm_planner *pl, const lsm_planner_config *cfg, lsm_pblock *store, uint32_t cap,
+                            const lsm_real start[LSM_MAX_AXES], const prog *p, sim_run_result *r)
+{
+    lsm_status st = lsm_planner_init(pl, cfg, store, cap, start);
+    if (st != LSM_OK) {
+        snprintf(r->err, sizeof r->err, "planner init: %s", lsm_status_str(st));
+        return -1;
+    }
+    for (size_t i = 0; i < p->n; i++) {
+        st = append_block(pl, &p->v[i]);
+        if (st != LSM_OK && st != LSM_E_ZERO_LENGTH) {
+            snprintf(r->err, sizeof r->err, "G-code line %u: planner: %s", (unsigned)p->v[i].b.line,
+                     lsm_status_str(st));
+            return -1;
+        }
+    }
+    if (lsm_planner_finish(pl) != LSM_OK) {
+        snprintf(r->err, sizeof r->err, "planner: cannot finish");
+        return -1;
+    }
+    return 0;
+}
+
+/* The planner's blocks into gp: geometry, cumulative starts, A B C at each start, feeds, and the stops. */
+static int vp_gpath_fill(gpath *gp, const lsm_planner *pl, const lsm_real start[LSM_MAX_AXES])
+{
+    double rot[3] = {start[3], start[4], start[5]};
+    for (uint32_t id = pl->head; id != pl->tail; id++) {
+        const lsm_pblock *b = lsm_planner_block(pl, id);
+        const size_t k = gp->n++;
+        gp->g[k] = b->g;
+        gp->s0[k] = gp->len;
+        if (b->g.kind == LSM_GEOM_LINE)
+            for (int a = 0; a < 3; a++)
+                rot[a] = b->g.u.line.p0[3 + a];
+        memcpy(&gp->rot[3 * k], rot, sizeof rot);
+        if (b->g.kind == LSM_GEOM_LINE)
+            for (int a = 0; a < 3; a++)
+                rot[a] = b->g.u.line.p0[3 + a] + b->g.u.line.dir[3 + a] * b->g.len;
+        gp->feed[k] = (b->flags & LSM_PB_RAPID) ? (double)INFINITY : b->feed_mm_s;
+        gp->len += b->g.len;
+    }
+    gp->s0[gp->n] = gp->len;
+    gp->stops = calloc(gp->n + 1, sizeof *gp->stops);
+    if (!gp->stops)
+        return -1;
+    for (size_t k = 1; k < gp->n; k++)
+        if (lsm_planner_block(pl, pl->head + (uint32_t)k)->flags & LSM_PB_STOP)
+            gp->stops[gp->n_stops++] = gp->s0[k];
+    return 0;
+}
+
+/* The Hermite table (gpath): intervals of about VP_TAB_STEP_MM in every block, turning at most VP_TAB_MAX_TURN_RAD.
+ * Without memory for it, gp evaluates exactly (slower). */
+static void vp_gpath_table(gpath *gp)
+{
+    const double ds = fmax(VP_TAB_STEP_MM, gp->len / VP_TAB_MAX_NODES);
+    size_t nodes = 0;
+    gp->tab_off = malloc(gp->n * sizeof *gp->tab_off);
+    gp->tab_m = malloc(gp->n * sizeof *gp->tab_m);
+    if (gp->tab_off && gp->tab_m) {
+        for (size_t k = 0; k < gp->n; k++) {
+            double kmax = 0;
+            for (int e = 0; e <= 2; e++) {
+                lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0}, cv[LSM_MAX_AXES] = {0};
+                lsm_geom_eval(&gp->g[k], gp->g[k].len * 0.5 * e, pos, t, cv);
+                kmax = fmax(kmax, sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]));
+            }
+            const double m = fmin(VP_TAB_MAX_INTERVALS,
+                                  fmax(ceil(gp->g[k].len / ds), ceil(gp->g[k].len * kmax / VP_TAB_MAX_TURN_RAD)));
+            gp->tab_m[k] = m < 1 ? 1u : (uint32_t)m;
+            gp->tab_off[k] = nodes;
+            nodes += gp->tab_m[k] + 1;
+        }
+        gp->tab = malloc(nodes * 6 * sizeof(double));
+    }
+    if (!gp->tab) {
+        free(gp->tab_off);
+        free(gp->tab_m);
+        gp->tab_off = NULL;
+        gp->tab_m = NULL; /* exact evaluation (slower) */
+        return;
+    }
+    for (size_t k = 0; k < gp->n; k++) {
+        for (uint32_t i = 0; i <= gp->tab_m[k]; i++) {
+            lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0};
+            const double u = i == gp->tab_m[k] ? gp->g[k].len : gp->g[k].len * i / gp->tab_m[k];
+            lsm_geom_eval(&gp->g[k], u, pos, t, NULL);
+            double *row = gp->tab + 6 * (gp->tab_off[k] + i);
+            for (int a = 0; a < 3; a++) {
+                row[a] = pos[a];
+                row[3 + a] = t[a];
+            }
+        }
+    }
+}
+
+/* VPOp's motion along the path: the faster of the two switching rules (vpop.h: refine_iters; neither is always
+ * faster). The samples in *S (malloc'd; NULL if neither found one), their count in *n. */
+static void vp_best_motion(const sim_run_opts *o, const sim_vpop_path *path, sim_vpop_limits *lim, double cycle_s,
+                           double **S, size_t *n)
+{
+    const double max_t = o->max_time_s > 0 ? o->max_time_s : VP_DEFAULT_MAX_TIME_S;
+    sim_vpop_stats vs;
+    *S = NULL;
+    *n = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        lim->refine_iters = pass ? SIM_VPOP_REFINE : 0;
+        if (o->progress)
+            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, 0.5 * pass, -1);
+        double *S2 = NULL;
+        size_t n2 = 0;
+        if (sim_vpop_plan(path, lim, cycle_s, (size_t)(max_t / cycle_s), &S2, &n2, &vs) != 0)
+            continue;
+        if (!*S || n2 < *n) {
+            free(*S);
+            *S = S2;
+            *n = n2;
+        } else {
+            free(S2);
+        }
+    }
+}
+
+/* The samples as setpoints (the last one exactly the programmed end), with feed and block sequence number. */
+static int vp_record(gpath *gp, const lsm_planner *pl, const double *S, size_t n, double cycle_s, rec *out,
+                     sim_run_result *r)
+{
+    double prev = 0;
+    for (size_t k = 0; k < n; k++) {
+        double q[SIM_VPOP_AXES];
+        gpath_eval(gp, S[k], q);
+        if (k + 1 == n)
+            for (int i = 0; i < LSM_MAX_AXES; i++)
+                q[i] = pl->tail_pos[i]; /* the end, exactly */
+        const size_t lo = vp_block_at(gp, S[k]);
+        const lsm_pblock *b = lsm_planner_block(pl, pl->head + (uint32_t)lo);
+        if (rec_push(out, q, (S[k] - prev) / cycle_s, b ? b->seq : 0) != 0) {
+            snprintf(r->err, sizeof r->err, "out of memory");
+            return -1;
+        }
+        prev = S[k];
+    }
+    return 0;
+}
+
 static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
 {
     lsm_planner_config cfg;
@@ -827,90 +996,13 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
     lsm_real start[LSM_MAX_AXES] = {0};
     if (p->n)
         memcpy(start, p->v[0].b.start, sizeof start);
-    lsm_status st = lsm_planner_init(pl, &cfg, store, cap, start);
-    if (st != LSM_OK) {
-        snprintf(r->err, sizeof r->err, "planner init: %s", lsm_status_str(st));
+    if (vp_plan_geometry(pl, &cfg, store, cap, start, p, r) != 0)
         goto done;
-    }
-    for (size_t i = 0; i < p->n; i++) {
-        st = append_block(pl, &p->v[i]);
-        if (st != LSM_OK && st != LSM_E_ZERO_LENGTH) {
-            snprintf(r->err, sizeof r->err, "G-code line %u: planner: %s", (unsigned)p->v[i].b.line,
-                     lsm_status_str(st));
-            goto done;
-        }
-    }
-    if (lsm_planner_finish(pl) != LSM_OK) {
-        snprintf(r->err, sizeof r->err, "planner: cannot finish");
-        goto done;
-    }
-    double rot[3] = {start[3], start[4], start[5]};
-    for (uint32_t id = pl->head; id != pl->tail; id++) {
-        const lsm_pblock *b = lsm_planner_block(pl, id);
-        const size_t k = gp.n++;
-        gp.g[k] = b->g;
-        gp.s0[k] = gp.len;
-        if (b->g.kind == LSM_GEOM_LINE)
-            for (int a = 0; a < 3; a++)
-                rot[a] = b->g.u.line.p0[3 + a];
-        memcpy(&gp.rot[3 * k], rot, sizeof rot);
-        if (b->g.kind == LSM_GEOM_LINE)
-            for (int a = 0; a < 3; a++)
-                rot[a] = b->g.u.line.p0[3 + a] + b->g.u.line.dir[3 + a] * b->g.len;
-        gp.feed[k] = (b->flags & LSM_PB_RAPID) ? (double)INFINITY : b->feed_mm_s;
-        gp.len += b->g.len;
-    }
-    gp.s0[gp.n] = gp.len;
-    gp.stops = calloc(gp.n + 1, sizeof *gp.stops);
-    if (!gp.stops) {
+    if (vp_gpath_fill(&gp, pl, start) != 0) {
         snprintf(r->err, sizeof r->err, "out of memory");
         goto done;
     }
-    for (size_t k = 1; k < gp.n; k++)
-        if (lsm_planner_block(pl, pl->head + (uint32_t)k)->flags & LSM_PB_STOP)
-            gp.stops[gp.n_stops++] = gp.s0[k];
-    /* the Hermite table: about 0.004 mm steps in every block (coarser for long paths: about 2e6 nodes at most) */
-    {
-        const double ds = fmax(0.004, gp.len / 2e6);
-        size_t nodes = 0;
-        gp.tab_off = malloc(gp.n * sizeof *gp.tab_off);
-        gp.tab_m = malloc(gp.n * sizeof *gp.tab_m);
-        if (gp.tab_off && gp.tab_m) {
-            for (size_t k = 0; k < gp.n; k++) {
-                /* and at most 0.02 rad of turning per interval (tiny, tight clothoids) */
-                double kmax = 0;
-                for (int e = 0; e <= 2; e++) {
-                    lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0}, cv[LSM_MAX_AXES] = {0};
-                    lsm_geom_eval(&gp.g[k], gp.g[k].len * 0.5 * e, pos, t, cv);
-                    kmax = fmax(kmax, sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]));
-                }
-                const double m = fmin(1e6, fmax(ceil(gp.g[k].len / ds), ceil(gp.g[k].len * kmax / 0.02)));
-                gp.tab_m[k] = m < 1 ? 1u : (uint32_t)m;
-                gp.tab_off[k] = nodes;
-                nodes += gp.tab_m[k] + 1;
-            }
-            gp.tab = malloc(nodes * 6 * sizeof(double));
-        }
-        if (gp.tab) {
-            for (size_t k = 0; k < gp.n; k++) {
-                for (uint32_t i = 0; i <= gp.tab_m[k]; i++) {
-                    lsm_real pos[LSM_MAX_AXES] = {0}, t[LSM_MAX_AXES] = {0};
-                    const double u = i == gp.tab_m[k] ? gp.g[k].len : gp.g[k].len * i / gp.tab_m[k];
-                    lsm_geom_eval(&gp.g[k], u, pos, t, NULL);
-                    double *row = gp.tab + 6 * (gp.tab_off[k] + i);
-                    for (int a = 0; a < 3; a++) {
-                        row[a] = pos[a];
-                        row[3 + a] = t[a];
-                    }
-                }
-            }
-        } else {
-            free(gp.tab_off);
-            free(gp.tab_m);
-            gp.tab_off = NULL;
-            gp.tab_m = NULL; /* exact evaluation (slower) */
-        }
-    }
+    vp_gpath_table(&gp);
     sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop};
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
@@ -921,54 +1013,16 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
         lim.a[ax->index] = ax->a_max_u_s2;
         lim.j[ax->index] = ax->j_max_u_s3;
     }
-    /* the reference is the faster of the two switching rules (vpop.h: refine_iters; neither is always faster) */
-    const double max_t = o->max_time_s > 0 ? o->max_time_s : 3600.0;
     size_t n = 0;
-    sim_vpop_stats vs;
     const double t0 = now_ns();
-    for (int pass = 0; pass < 2; pass++) {
-        lim.refine_iters = pass ? SIM_VPOP_REFINE : 0;
-        if (o->progress)
-            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, 0.5 * pass, -1);
-        double *S2 = NULL;
-        size_t n2 = 0;
-        if (sim_vpop_plan(&path, &lim, cfg.cycle_s, (size_t)(max_t / cfg.cycle_s), &S2, &n2, &vs) != 0)
-            continue;
-        if (!S || n2 < n) {
-            free(S);
-            S = S2;
-            n = n2;
-        } else {
-            free(S2);
-        }
-    }
+    vp_best_motion(o, &path, &lim, cfg.cycle_s, &S, &n);
     if (!S) {
         snprintf(r->err, sizeof r->err, "vpop: no motion found");
         goto done;
     }
     r->interp_ns_per_cycle = n ? (now_ns() - t0) / (double)n : 0;
-    double prev = 0;
-    for (size_t k = 0; k < n; k++) {
-        double q[SIM_VPOP_AXES];
-        gpath_eval(&gp, S[k], q);
-        if (k + 1 == n)
-            for (int i = 0; i < LSM_MAX_AXES; i++)
-                q[i] = pl->tail_pos[i]; /* the end, exactly */
-        size_t lo = 0, hi = gp.n;
-        while (hi - lo > 1) {
-            const size_t mid = (lo + hi) / 2;
-            if (gp.s0[mid] <= S[k])
-                lo = mid;
-            else
-                hi = mid;
-        }
-        const lsm_pblock *b = lsm_planner_block(pl, pl->head + (uint32_t)lo);
-        if (rec_push(out, q, (S[k] - prev) / cfg.cycle_s, b ? b->seq : 0) != 0) {
-            snprintf(r->err, sizeof r->err, "out of memory");
-            goto done;
-        }
-        prev = S[k];
-    }
+    if (vp_record(&gp, pl, S, n, cfg.cycle_s, out, r) != 0)
+        goto done;
     vpop_intersample(&gp, &lim, S, n, cfg.cycle_s, r);
     r->cycles = n;
     r->duration_s = (double)n * cfg.cycle_s;

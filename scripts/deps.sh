@@ -9,7 +9,8 @@ PKGS=(gcc make cmake ninja-build pkg-config git libcmocka-dev
       python3 python3-venv python3-dev
       gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
       libgpiod-dev gpiod can-utils iproute2
-      qemu-system-x86 busybox-static xz-utils gcc-12)
+      qemu-system-x86 busybox-static xz-utils gcc-12
+      clang-format clang-tidy)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -47,12 +47,14 @@ static const lsm_co_od_range k_ranges[R_COUNT] = {
 #error "the PDO mapping entries below list 8 sub-indices"
 #endif
 
+/* NOLINTBEGIN(bugprone-macro-parentheses): arr names a member for offsetof, which takes no parentheses */
 #define MAP_ENTRIES(idx, g, arr)                                                                              \
     E_U8(idx, 0, RW_ | HK_, g, R_MAP_COUNT, OFF(arr[0].n_map)), E_U32(idx, 1, RW_ | HK_, g, 0, OFF(arr[0].map[0])), \
         E_U32(idx, 2, RW_ | HK_, g, 0, OFF(arr[0].map[1])), E_U32(idx, 3, RW_ | HK_, g, 0, OFF(arr[0].map[2])),   \
         E_U32(idx, 4, RW_ | HK_, g, 0, OFF(arr[0].map[3])), E_U32(idx, 5, RW_ | HK_, g, 0, OFF(arr[0].map[4])),   \
         E_U32(idx, 6, RW_ | HK_, g, 0, OFF(arr[0].map[5])), E_U32(idx, 7, RW_ | HK_, g, 0, OFF(arr[0].map[6])),   \
         E_U32(idx, 8, RW_ | HK_, g, 0, OFF(arr[0].map[7]))
+/* NOLINTEND(bugprone-macro-parentheses) */
 
 static const lsm_co_od_entry k_od[] = {
     /* CiA 301 communication area */

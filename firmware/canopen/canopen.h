@@ -61,10 +61,7 @@
 #include "co_pdo.h"
 #include "co_sdo.h"
 
-/* SDO buffer: the largest object transferred in segments (path block 48 bytes, device name). */
-#ifndef LSM_CANOPEN_SDO_BUF
-#define LSM_CANOPEN_SDO_BUF 64
-#endif
+/* Compile-time settings (LSM_CANOPEN_SDO_BUF): lsm_config.h. */
 
 /* CiA 301 device type 0x1000: profile 402, servo drive. */
 #define LSM_CANOPEN_DEVICE_TYPE 0x00020192u

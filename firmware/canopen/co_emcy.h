@@ -22,12 +22,7 @@
 
 #include "can.h"
 
-#ifndef LSM_CO_EMCY_HISTORY
-#define LSM_CO_EMCY_HISTORY 8     /* 0x1003 entries */
-#endif
-#ifndef LSM_CO_EMCY_ACTIVE
-#define LSM_CO_EMCY_ACTIVE 12     /* active conditions tracked at once */
-#endif
+/* Compile-time settings (LSM_CO_EMCY_HISTORY, LSM_CO_EMCY_ACTIVE): lsm_config.h. */
 
 /* Error register bits (0x1001). */
 #define LSM_CO_ERREG_GENERIC 0x01u

@@ -27,10 +27,7 @@
 #include "can.h"
 #include "co_od.h"
 
-/* Number of heartbeat consumer entries (0x1016 sub-indices). */
-#ifndef LSM_CO_HB_CONSUMERS
-#define LSM_CO_HB_CONSUMERS 2
-#endif
+/* Compile-time settings (LSM_CO_HB_CONSUMERS): lsm_config.h. */
 
 typedef enum lsm_co_nmt_state {
     LSM_CO_NMT_INITIALISING = 0x00,

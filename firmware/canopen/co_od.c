@@ -275,6 +275,8 @@ uint32_t lsm_co_od_read(const lsm_co_od *od, const lsm_co_od_ref *ref, uint8_t *
 
 void lsm_co_od_store(const lsm_co_od_ref *ref, const uint8_t *data)
 {
+    if (ref->ptr == NULL)
+        return; /* a constant or an entry without storage (its hook handles writes): nothing to store */
     uint64_t raw = lsm_can_get_le(data, ref->entry->size);
     switch (ref->entry->size) {
     case 1: {

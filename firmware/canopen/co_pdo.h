@@ -39,15 +39,7 @@
 #include "can.h"
 #include "co_od.h"
 
-#ifndef LSM_CO_N_RPDO
-#define LSM_CO_N_RPDO 4
-#endif
-#ifndef LSM_CO_N_TPDO
-#define LSM_CO_N_TPDO 4
-#endif
-#ifndef LSM_CO_PDO_MAX_MAP
-#define LSM_CO_PDO_MAX_MAP 8
-#endif
+/* Compile-time settings (LSM_CO_N_RPDO, LSM_CO_N_TPDO, LSM_CO_PDO_MAX_MAP): lsm_config.h. */
 
 #define LSM_CO_PDO_INVALID 0x80000000u  /* COB-ID bit 31: the PDO does not exist */
 #define LSM_CO_PDO_NO_RTR 0x40000000u   /* COB-ID bit 30: no RTR allowed (always so here) */

@@ -33,10 +33,7 @@
 #include "can.h"
 #include "co_od.h"
 
-/* Default time a segmented transfer may wait for its next segment (microseconds). */
-#ifndef LSM_CO_SDO_TIMEOUT_US
-#define LSM_CO_SDO_TIMEOUT_US 1000000u
-#endif
+/* Compile-time settings (LSM_CO_SDO_TIMEOUT_US): lsm_config.h. */
 
 typedef enum lsm_co_sdo_phase {
     LSM_CO_SDO_IDLE = 0,

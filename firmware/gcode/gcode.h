@@ -73,47 +73,11 @@
 #include "lsm_config.h"
 #include "status.h"
 
-/* Longest line accepted, in bytes, not counting the line ending. */
-#ifndef LSM_GCODE_MAX_LINE
-#define LSM_GCODE_MAX_LINE 256
-#endif
-/* Largest magnitude of any number and of any resulting coordinate (mm, deg, mm/min or in/min):
- * beyond it a value is "too large to represent" (LSM_E_GC_NUMBER_RANGE). In float builds keep in
- * mind that the spacing of floats at 1e6 is 0.06. */
-#ifndef LSM_GCODE_MAX_ABS
-#define LSM_GCODE_MAX_ABS 1.0e6
-#endif
-/* Centre-form arcs: largest start/end radius difference, absolute (mm) and relative
- * (LinuxCNC: 2 * 0.01 * sqrt(2) mm and 0.1 %). */
-#ifndef LSM_GCODE_ARC_ABS_TOL_MM
-#define LSM_GCODE_ARC_ABS_TOL_MM 0.028284271247461901
-#endif
-#ifndef LSM_GCODE_ARC_REL_TOL
-#define LSM_GCODE_ARC_REL_TOL 0.001
-#endif
-/* Smallest arc radius, and the amount by which a radius-form chord may exceed the diameter (mm;
- * LinuxCNC: 0.00005 inch). */
-#ifndef LSM_GCODE_ARC_RADIUS_TOL_MM
-#define LSM_GCODE_ARC_RADIUS_TOL_MM 0.00127
-#endif
-/* Motion blocks one line can produce (G28/G30: the intermediate point, then home). */
-#ifndef LSM_GCODE_MAX_BLOCKS
-#define LSM_GCODE_MAX_BLOCKS 2
-#endif
-/* Machine-function events one line can produce (S T M6 M3 M7 M8 G4 G43 M0 M2 and the M5 M9 of an end). */
-#ifndef LSM_GCODE_MAX_EVENTS
-#define LSM_GCODE_MAX_EVENTS 12
-#endif
-/* Largest S (rpm), T, H: beyond it a value is refused (LSM_E_GC_BAD_VALUE). */
-#ifndef LSM_GCODE_MAX_TOOL
-#define LSM_GCODE_MAX_TOOL 99999
-#endif
-/* Work offsets G54..G59 (G10 L2/L20 P1..P6). */
+/* Compile-time settings (LSM_GCODE_MAX_LINE, LSM_GCODE_MAX_ABS, LSM_GCODE_ARC_ABS_TOL_MM, LSM_GCODE_ARC_REL_TOL,
+ * LSM_GCODE_ARC_RADIUS_TOL_MM, LSM_GCODE_MAX_BLOCKS, LSM_GCODE_MAX_EVENTS, LSM_GCODE_MAX_TOOL, LSM_GCODE_MAX_TURNS):
+ * lsm_config.h. */
+/* Work offsets G54..G59 (G10 L2/L20 P1..P6): fixed by the language, not a setting. */
 #define LSM_GCODE_N_WCS 6
-/* Largest P (number of turns) of an arc. */
-#ifndef LSM_GCODE_MAX_TURNS
-#define LSM_GCODE_MAX_TURNS 1000
-#endif
 
 /* Axis indices into every position array: X Y Z in mm, A B C in rad. */
 enum { LSM_GCODE_X = 0, LSM_GCODE_Y, LSM_GCODE_Z, LSM_GCODE_A, LSM_GCODE_B, LSM_GCODE_C };

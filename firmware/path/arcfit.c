@@ -7,6 +7,13 @@
 #define R1 LSM_R(1.0)
 #define PI_R ((lsm_real)LSM_PI)
 
+/* Tuning of the fit. */
+#define AF_LINE_PREFER LSM_R(0.25)     /* a line within tol / 4 is taken without trying an arc (fewer curvature steps) */
+#define AF_ORDER_SLACK LSM_R(1e-9)     /* relative slack of "the points follow each other" (rounding of the points) */
+#define AF_ANGLE_SLACK_RAD LSM_R(1e-9) /* a point this far before the arc's start still counts as at its start */
+#define AF_FLAT_EPS LSM_R(2048.0)      /* an arc's evaluation error R eps times this must stay below tol (float) */
+#define AF_MIN_RADIUS_TOLS LSM_R(4.0)  /* radius at least 4 tol: a smaller circle is not worth an arc at this tol */
+
 static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -46,9 +53,155 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_re
         const lsm_real x[3] = {r[0] - t * u[0], r[1] - t * u[1], r[2] - t * u[2]};
         e = lsm_max2(e, lsm_sqrt(dot3(x, x)));
     }
-    if (tprev > L * (R1 + LSM_R(1e-9)))
+    if (tprev > L * (R1 + AF_ORDER_SLACK))
         return false;
     *err = e;
+    return true;
+}
+
+/* The line p0 -> qe as the fit, if it fits within tol. */
+static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6,
+                         lsm_geom *g, lsm_arcfit_result *res)
+{
+    if (!(line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK))
+        return false;
+    res->kind = LSM_ARCFIT_LINE;
+    res->err_mm = lerr;
+    return true;
+}
+
+typedef enum { AF_PLANE_OK, AF_PLANE_NONE, AF_PLANE_ON_CHORD } af_plane_kind;
+
+/* The arc's plane: the one given (the chord direction u projected into it), or the chord's with the point farthest
+ * from it. Writes the unit normal nh and the in-plane chord direction u (unit; on entry the chord's). */
+static af_plane_kind af_plane(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real L, const lsm_real *plane_n,
+                              lsm_real u[3], lsm_real nh[3])
+{
+    if (plane_n) {
+        const lsm_real nl = lsm_sqrt(dot3(plane_n, plane_n));
+        if (!(nl > R0))
+            return AF_PLANE_NONE;
+        for (int i = 0; i < 3; i++)
+            nh[i] = plane_n[i] / nl;
+        /* the chord must lie in that plane (it joins the previous arc's end to a point on its plane) */
+        const lsm_real un = dot3(u, nh);
+        for (int i = 0; i < 3; i++)
+            u[i] -= un * nh[i];
+        const lsm_real ul = lsm_sqrt(dot3(u, u));
+        if (!(ul > R0))
+            return AF_PLANE_NONE;
+        for (int i = 0; i < 3; i++)
+            u[i] /= ul;
+        return AF_PLANE_OK;
+    }
+    /* the sum of the points' offsets from the chord (an arc's all point the same way): it averages the rounding of
+     * the points, where the farthest point alone tilts the plane by about rounding / sagitta (a G-code file rounded
+     * to 0.1 um, 6 mm runs on R 40: 2e-4 rad, which the arcs after it inherit, so that a ring in a tilted plane left
+     * the tolerance within a quarter turn) */
+    lsm_real w[3] = {R0, R0, R0};
+    for (int i = 0; i < n - 1; i++) {
+        lsm_real r[3];
+        sub3(q[i].p, p0, r);
+        const lsm_real t = dot3(r, u);
+        for (int j = 0; j < 3; j++)
+            w[j] += r[j] - t * u[j];
+    }
+    cross3(u, w, nh);
+    const lsm_real nl = lsm_sqrt(dot3(nh, nh));
+    if (!(nl > LSM_REAL_EPS * L * L)) /* all on the chord */
+        return AF_PLANE_ON_CHORD;
+    for (int i = 0; i < 3; i++)
+        nh[i] /= nl;
+    return AF_PLANE_OK;
+}
+
+/* Curvature by least squares over the points, sagitta model y(t) = k t (L - t) / 2 (robust to the rounding of the
+ * points, unlike a circle through three of them); (u, v) the chord's frame in the plane. */
+static bool af_curvature(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real L, const lsm_real u[3],
+                         const lsm_real v[3], lsm_real *k)
+{
+    lsm_real sgy = R0, sgg = R0;
+    for (int i = 0; i < n - 1; i++) {
+        lsm_real r[3];
+        sub3(q[i].p, p0, r);
+        const lsm_real t = dot3(r, u), y = dot3(r, v);
+        const lsm_real gg = t * (L - t) / LSM_R(2.0);
+        sgy += y * gg;
+        sgg += gg * gg;
+    }
+    if (!(sgg > R0))
+        return false;
+    *k = sgy / sgg;
+    return true;
+}
+
+/* The candidate circle (centre C, frame e1 = (p0 - C) / r, e2 = nh x e1, sense sg): every point's distance to it
+ * and every segment's bound, with the points' angles along the arc increasing within [0, pi]. On success the error
+ * bound and the arc's end angle. */
+static bool af_check_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol, const lsm_real C[3],
+                         const lsm_real e1[3], const lsm_real e2[3], const lsm_real nh[3], lsm_real r, lsm_real sg,
+                         lsm_real *err_out, lsm_real *th_end)
+{
+    lsm_real err = R0, eprev = R0, th_prev = R0;
+    const lsm_real *xprev = p0;
+    for (int i = 0; i < n; i++) {
+        lsm_real rel[3];
+        sub3(q[i].p, C, rel);
+        const lsm_real x1 = dot3(rel, e1), y1 = dot3(rel, e2), h = dot3(rel, nh);
+        lsm_real th = lsm_atan2(sg * y1, x1);
+        if (th < -AF_ANGLE_SLACK_RAD)
+            th += LSM_R(2.0) * PI_R;
+        if (th < th_prev || th > PI_R)
+            return false;
+        const lsm_real rho = lsm_sqrt(x1 * x1 + y1 * y1);
+        const lsm_real e = lsm_sqrt((rho - r) * (rho - r) + h * h);
+        lsm_real c[3];
+        sub3(q[i].p, xprev, c);
+        const lsm_real seg = lsm_max2(e, eprev) + dot3(c, c) / (LSM_R(8.0) * r);
+        err = lsm_max2(err, lsm_max2(e, seg));
+        if (err > tol)
+            return false;
+        th_prev = th;
+        eprev = e;
+        xprev = q[i].p;
+    }
+    *err_out = err;
+    *th_end = th_prev;
+    return true;
+}
+
+/* The arc through p0 and qe with curvature k (radius R) in the plane nh, minor arc bulging to +v when k > 0, if every
+ * point and segment is within tol. */
+static bool af_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol, lsm_real L, lsm_real k,
+                   lsm_real R, const lsm_real u[3], const lsm_real v[3], const lsm_real nh[3], lsm_geom *g,
+                   lsm_arcfit_result *res)
+{
+    const lsm_real yc = (k > R0 ? -R1 : R1) * lsm_sqrt(R * R - L * L / LSM_R(4.0));
+    lsm_real C[3], e1[3], e2[3];
+    for (int i = 0; i < 3; i++)
+        C[i] = p0[i] + LSM_R(0.5) * L * u[i] + yc * v[i];
+    for (int i = 0; i < 3; i++)
+        e1[i] = p0[i] - C[i];
+    const lsm_real e1l = lsm_sqrt(dot3(e1, e1));
+    if (!(e1l > R0))
+        return false;
+    for (int i = 0; i < 3; i++)
+        e1[i] /= e1l; /* exactly unit: the plane normal is passed on from arc to arc */
+    cross3(nh, e1, e2);
+    const lsm_real r = R;
+    const lsm_real sg = k > R0 ? -R1 : R1; /* bulging to +v: clockwise about nh */
+    lsm_real err, th_end;
+    if (!af_check_arc(p0, q, n, tol, C, e1, e2, nh, r, sg, &err, &th_end))
+        return false;
+    if (!(th_end > R0))
+        return false;
+    if (lsm_geom_arc_init_general(g, C, e1, e2, r, R0, sg * th_end, R0) != LSM_OK)
+        return false;
+    res->kind = LSM_ARCFIT_ARC;
+    res->err_mm = err;
+    res->radius_mm = r;
+    for (int i = 0; i < 3; i++)
+        res->normal[i] = nh[i];
     return true;
 }
 
@@ -65,7 +218,7 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
     lsm_real b6[LSM_MAX_AXES] = {qe[0], qe[1], qe[2], R0, R0, R0};
     lsm_real lerr = LSM_REAL_MAX;
     const bool line_ok = fit_line(p0, q, n, &lerr);
-    if (line_ok && (lerr <= tol * LSM_R(0.25) || n < 2)) {
+    if (line_ok && (lerr <= tol * AF_LINE_PREFER || n < 2)) {
         if (lerr > tol || lsm_geom_line_init(g, a6, b6) != LSM_OK)
             return false;
         res->kind = LSM_ARCFIT_LINE;
@@ -74,8 +227,7 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
     }
     if (n < 2)
         return false;
-    /* chord p0 -> qe (both kept exactly), its direction u; the plane: the one given, or the chord's with the point
-     * farthest from it */
+    /* chord p0 -> qe (both kept exactly), its direction u, the plane nh, v across the chord in the plane */
     lsm_real b[3], u[3], nh[3], v[3];
     sub3(qe, p0, b);
     const lsm_real L = lsm_sqrt(dot3(b, b));
@@ -83,121 +235,20 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
         return false;
     for (int i = 0; i < 3; i++)
         u[i] = b[i] / L;
-    if (plane_n) {
-        const lsm_real nl = lsm_sqrt(dot3(plane_n, plane_n));
-        if (!(nl > R0))
-            return false;
-        for (int i = 0; i < 3; i++)
-            nh[i] = plane_n[i] / nl;
-        /* the chord must lie in that plane (it joins the previous arc's end to a point on its plane) */
-        const lsm_real un = dot3(u, nh);
-        for (int i = 0; i < 3; i++)
-            u[i] -= un * nh[i];
-        const lsm_real ul = lsm_sqrt(dot3(u, u));
-        if (!(ul > R0))
-            return false;
-        for (int i = 0; i < 3; i++)
-            u[i] /= ul;
-    } else {
-        /* the sum of the points' offsets from the chord (an arc's all point the same way): it averages the
-         * rounding of the points, where the farthest point alone tilts the plane by about rounding / sagitta (a
-         * G-code file rounded to 0.1 um, 6 mm runs on R 40: 2e-4 rad, which the arcs after it inherit, so that a
-         * ring in a tilted plane left the tolerance within a quarter turn) */
-        lsm_real w[3] = {R0, R0, R0};
-        for (int i = 0; i < n - 1; i++) {
-            lsm_real r[3];
-            sub3(q[i].p, p0, r);
-            const lsm_real t = dot3(r, u);
-            for (int j = 0; j < 3; j++)
-                w[j] += r[j] - t * u[j];
-        }
-        cross3(u, w, nh);
-        const lsm_real nl = lsm_sqrt(dot3(nh, nh));
-        if (!(nl > LSM_REAL_EPS * L * L)) { /* all on the chord */
-            if (line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK) {
-                res->kind = LSM_ARCFIT_LINE;
-                res->err_mm = lerr;
-                return true;
-            }
-            return false;
-        }
-        for (int i = 0; i < 3; i++)
-            nh[i] /= nl;
-    }
-    cross3(nh, u, v); /* (u, v, nh) right-handed; v points across the chord, in the plane */
-    /* curvature by least squares over the points, sagitta model y(t) = k t (L - t) / 2 (robust to the rounding
-     * of the points, unlike a circle through three of them) */
-    lsm_real sgy = R0, sgg = R0;
-    for (int i = 0; i < n - 1; i++) {
-        lsm_real r[3];
-        sub3(q[i].p, p0, r);
-        const lsm_real t = dot3(r, u), y = dot3(r, v);
-        const lsm_real gg = t * (L - t) / LSM_R(2.0);
-        sgy += y * gg;
-        sgg += gg * gg;
-    }
-    if (!(sgg > R0))
+    const af_plane_kind pk = af_plane(p0, q, n, L, plane_n, u, nh);
+    if (pk == AF_PLANE_NONE)
         return false;
-    const lsm_real k = sgy / sgg;
+    if (pk == AF_PLANE_ON_CHORD)
+        return af_take_line(line_ok, lerr, tol, a6, b6, g, res);
+    cross3(nh, u, v); /* (u, v, nh) right-handed; v points across the chord, in the plane */
+    lsm_real k;
+    if (!af_curvature(p0, q, n, L, u, v, &k))
+        return false;
     const lsm_real R = R1 / lsm_fabs(k);
     /* an arc is evaluated with an error of about R eps (lsm_real): a radius so large that this error is not far
      * below the tolerance (float builds) is fitted with a line, or not at all */
-    const bool too_flat = R * LSM_REAL_EPS * LSM_R(2048.0) > tol;
-    if (!(lsm_fabs(k) > R0) || !(R > LSM_R(4.0) * tol) || !(L < LSM_R(2.0) * R) || too_flat) {
-        if (line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK) {
-            res->kind = LSM_ARCFIT_LINE;
-            res->err_mm = lerr;
-            return true;
-        }
-        return false;
-    }
-    /* the circle through p0 and qe with that curvature, minor arc bulging to +v when k > 0 */
-    const lsm_real yc = (k > R0 ? -R1 : R1) * lsm_sqrt(R * R - L * L / LSM_R(4.0));
-    lsm_real C[3], e1[3], e2[3];
-    for (int i = 0; i < 3; i++)
-        C[i] = p0[i] + LSM_R(0.5) * L * u[i] + yc * v[i];
-    for (int i = 0; i < 3; i++)
-        e1[i] = p0[i] - C[i];
-    const lsm_real e1l = lsm_sqrt(dot3(e1, e1));
-    if (!(e1l > R0))
-        return false;
-    for (int i = 0; i < 3; i++)
-        e1[i] /= e1l; /* exactly unit: the plane normal is passed on from arc to arc */
-    cross3(nh, e1, e2);
-    const lsm_real r = R;
-    const lsm_real sg = k > R0 ? -R1 : R1; /* bulging to +v: clockwise about nh */
-    /* every point: distance to the circle, and its angle along the arc (increasing, within [0, pi]) */
-    lsm_real err = R0, eprev = R0, th_prev = R0;
-    const lsm_real *xprev = p0;
-    for (int i = 0; i < n; i++) {
-        lsm_real rel[3];
-        sub3(q[i].p, C, rel);
-        const lsm_real x1 = dot3(rel, e1), y1 = dot3(rel, e2), h = dot3(rel, nh);
-        lsm_real th = lsm_atan2(sg * y1, x1);
-        if (th < -LSM_R(1e-9))
-            th += LSM_R(2.0) * PI_R;
-        if (th < th_prev || th > PI_R)
-            return false;
-        const lsm_real rho = lsm_sqrt(x1 * x1 + y1 * y1);
-        const lsm_real e = lsm_sqrt((rho - r) * (rho - r) + h * h);
-        lsm_real c[3];
-        sub3(q[i].p, xprev, c);
-        const lsm_real seg = lsm_max2(e, eprev) + dot3(c, c) / (LSM_R(8.0) * r);
-        err = lsm_max2(err, lsm_max2(e, seg));
-        if (err > tol)
-            return false;
-        th_prev = th;
-        eprev = e;
-        xprev = q[i].p;
-    }
-    if (!(th_prev > R0))
-        return false;
-    if (lsm_geom_arc_init_general(g, C, e1, e2, r, R0, sg * th_prev, R0) != LSM_OK)
-        return false;
-    res->kind = LSM_ARCFIT_ARC;
-    res->err_mm = err;
-    res->radius_mm = r;
-    for (int i = 0; i < 3; i++)
-        res->normal[i] = nh[i];
-    return true;
+    const bool too_flat = R * LSM_REAL_EPS * AF_FLAT_EPS > tol;
+    if (!(lsm_fabs(k) > R0) || !(R > AF_MIN_RADIUS_TOLS * tol) || !(L < LSM_R(2.0) * R) || too_flat)
+        return af_take_line(line_ok, lerr, tol, a6, b6, g, res);
+    return af_arc(p0, q, n, tol, L, k, R, u, v, nh, g, res);
 }

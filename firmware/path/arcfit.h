@@ -26,10 +26,7 @@
 
 #include "geom.h"
 
-/* Most points of one run (pending in the planner until the run is emitted). */
-#ifndef LSM_ARCFIT_MAX
-#define LSM_ARCFIT_MAX 32
-#endif
+/* Compile-time settings (LSM_ARCFIT_MAX): lsm_config.h. */
 
 typedef struct lsm_arcfit_pt {
     lsm_real p[3];

@@ -353,8 +353,11 @@ static inline bool cl_series_regime(lsm_real k0, lsm_real c, lsm_real s)
     return phi <= (lsm_real)LSM_CLOTHOID_SERIES_PHASE_RAD;
 }
 
-void lsm_clothoid_integral(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy)
+void lsm_clothoid_integral(lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real s_mm,
+                           lsm_real *dx_mm, lsm_real *dy_mm)
 {
+    const lsm_real th0 = theta0_rad, k0 = kappa0_per_mm, c = c_per_mm2, s = s_mm;
+    lsm_real *const dx = dx_mm, *const dy = dy_mm;
     if (s == LSM_R(0.0)) {
         *dx = *dy = LSM_R(0.0);
         return;
@@ -810,11 +813,20 @@ static lsm_real cl_wrap_pi(lsm_real a)
     return a; /* in [-pi, pi) */
 }
 
-lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm,
-                               lsm_real nx, lsm_real ny, lsm_clothoid_fit_result *out)
+/* Tuning of the fit. */
+#define CL_FIT_ZERO_EPS LSM_R(16.0)  /* eps multiples: on the line / along its normal within the rounding of d0 */
+#define CL_FIT_SCAN_K_MIN (-4)       /* the scan starts at s = dist / 4: shorter candidates turn too sharply */
+#define CL_FIT_SCAN_K_MAX 24         /* ... and ends at s = 2^12 dist, the documented reach (4096 times dist) */
+#define CL_FIT_CONV_EPS LSM_R(32.0)  /* eps multiples of the problem's scale: residuals at rounding level */
+#define CL_FIT_MAX_HALVINGS 30       /* damping: a Newton step is halved at most this often (2^-30) */
+#define CL_FIT_MERIT_FLOOR LSM_R(4.0) /* eps^2 multiples: a merit at rounding level counts as a decrease */
+#define CL_FIT_BISECT_EVERY 3        /* fallback: a bisection when 3 steps did not halve the bracket */
+#define CL_FIT_COLLAPSE_EPS LSM_R(4.0) /* fallback: eps multiples of s; a narrower bracket pins the root */
+
+/* Validates the input and sets up the problem: unit normal, signed distance d0 and its rounding bound. */
+static lsm_status cl_fit_setup(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm, lsm_real nx,
+                               lsm_real ny, cl_fit *f, lsm_real *d_err)
 {
-    if (start == NULL || out == NULL)
-        return LSM_E_NULL;
     const lsm_real v[8] = {start->x_mm, start->y_mm, start->theta_rad, start->kappa_per_mm, qx_mm, qy_mm, nx, ny};
     for (int i = 0; i < 8; i++) {
         lsm_status st = cl_check(v[i]);
@@ -824,129 +836,236 @@ lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, 
     const lsm_real nn = lsm_sqrt(nx * nx + ny * ny);
     if (!(nn > LSM_R(0.0)) || lsm_check_finite(nn))
         return LSM_E_FIT_LINE;
+    f->x0 = start->x_mm;
+    f->y0 = start->y_mm;
+    f->th0 = start->theta_rad;
+    f->k0 = start->kappa_per_mm;
+    f->nx = nx / nn;
+    f->ny = ny / nn;
+    f->evals = 0;
+    const lsm_real px = f->x0 - qx_mm, py = f->y0 - qy_mm;
+    f->d0 = f->nx * px + f->ny * py;
+    *d_err = CL_FIT_ZERO_EPS * LSM_REAL_EPS *
+             (lsm_fabs(f->nx * px) + lsm_fabs(f->ny * py) + lsm_fabs(f->nx * qx_mm) + lsm_fabs(f->ny * qy_mm));
+    return LSM_OK;
+}
+
+/* Start on the line: the only solution is s = 0, if the tangent is already along the normal. */
+static lsm_status cl_fit_on_line(const cl_fit *f, const lsm_clothoid_state *start, lsm_clothoid_fit_result *out)
+{
+    lsm_real co, si;
+    lsm_sincos(f->th0, &si, &co);
+    const lsm_real cr = f->nx * si - f->ny * co;
+    if (!(lsm_fabs(cr) <= CL_FIT_ZERO_EPS * LSM_REAL_EPS))
+        return LSM_E_FIT_ON_LINE;
+    out->c_per_mm2 = LSM_R(0.0);
+    out->s_mm = LSM_R(0.0);
+    out->end = *start;
+    out->residual_mm = lsm_fabs(f->d0);
+    out->residual_rad = lsm_fabs(cr);
+    return LSM_OK;
+}
+
+/* The sharpness that meets the angle condition at length s (the reduced problem: F2 = 0). */
+static inline lsm_real cl_fit_c_of_s(const cl_fit *f, lsm_real s)
+{
+    return LSM_R(2.0) * (f->delta - f->k0 * s) / (s * s);
+}
+
+/* A bracket of the reduced residual F1(c(s), s): s scanned geometrically, s = dist 2^(k/2), for the first
+ * sign change. [sa, sb] with ra = F1(sa) on the start's side (sa = 0: ra = d0) and rb on the other or 0. */
+static bool cl_fit_scan(cl_fit *f, lsm_real dist, lsm_real *sa, lsm_real *ra, lsm_real *sb, lsm_real *rb)
+{
+    *sa = LSM_R(0.0);
+    *ra = f->d0;
+    *sb = LSM_R(0.0);
+    *rb = f->d0;
+    for (int k = CL_FIT_SCAN_K_MIN; k <= CL_FIT_SCAN_K_MAX; k++) {
+        /* s = dist * 2^(k/2) */
+        lsm_real s = dist * ((k & 1) ? LSM_R(1.4142135623730951) : LSM_R(1.0));
+        int e = k >> 1; /* floor(k / 2) */
+        for (int i = 0; i < (e < 0 ? -e : e); i++)
+            s = e < 0 ? s * LSM_R(0.5) : s * LSM_R(2.0);
+        const lsm_real c = cl_fit_c_of_s(f, s);
+        lsm_real F1, F2;
+        if (!cl_fit_eval(f, c, s, &F1, &F2, NULL)) {
+            if (k > 0)
+                return false; /* turning beyond the limit: stop searching */
+            continue;
+        }
+        if ((F1 > LSM_R(0.0)) != (f->d0 > LSM_R(0.0)) || F1 == LSM_R(0.0)) {
+            *sb = s;
+            *rb = F1;
+            return true;
+        }
+        *sa = s;
+        *ra = F1;
+    }
+    return false;
+}
+
+/* Residuals at rounding level, relative to the problem's scale. */
+static bool cl_fit_converged(const cl_fit *f, lsm_real dist, lsm_real s, lsm_real F1, lsm_real F2)
+{
+    const lsm_real tol1 = CL_FIT_CONV_EPS * LSM_REAL_EPS * (dist + s);
+    const lsm_real tol2 = CL_FIT_CONV_EPS * LSM_REAL_EPS * (LSM_R(1.0) + lsm_fabs(f->delta) + lsm_fabs(f->k0 * s));
+    return lsm_fabs(F1) <= tol1 && lsm_fabs(F2) <= tol2;
+}
+
+/* One damped Newton step on (c, s) from the residuals F1, F2 and Jacobian J (determinant det != 0): the full step, halved until the merit
+ * (F1 / dist)^2 + F2^2 decreases. False if no halving decreases it. */
+static bool cl_fit_newton_step(cl_fit *f, lsm_real dist, const lsm_real J[4], lsm_real det, lsm_real F1,
+                               lsm_real F2, lsm_real *c, lsm_real *s)
+{
+    const lsm_real dc = (-F1 * J[3] + F2 * J[1]) / det;
+    const lsm_real dsv = (-F2 * J[0] + F1 * J[2]) / det;
+    const lsm_real m0 = (F1 / dist) * (F1 / dist) + F2 * F2;
+    lsm_real lam = LSM_R(1.0);
+    for (int h = 0; h < CL_FIT_MAX_HALVINGS; h++, lam *= LSM_R(0.5)) {
+        const lsm_real cn = *c + lam * dc, sn = *s + lam * dsv;
+        lsm_real G1, G2;
+        if (!cl_fit_eval(f, cn, sn, &G1, &G2, NULL))
+            continue;
+        const lsm_real m1 = (G1 / dist) * (G1 / dist) + G2 * G2;
+        if (m1 < m0 || m1 <= CL_FIT_MERIT_FLOOR * LSM_REAL_EPS * LSM_REAL_EPS) {
+            *c = cn;
+            *s = sn;
+            return true;
+        }
+    }
+    return false;
+}
+
+/* Damped Newton on (c, s) from (*c, *s); on success the final residuals in F1, F2. */
+static bool cl_fit_newton(cl_fit *f, lsm_real dist, lsm_real *c, lsm_real *s, lsm_real *F1, lsm_real *F2, int *it)
+{
+    lsm_real J[4];
+    *it = 0;
+    while (true) {
+        if (!cl_fit_eval(f, *c, *s, F1, F2, J))
+            return false;
+        if (cl_fit_converged(f, dist, *s, *F1, *F2))
+            return true;
+        if (*it >= LSM_CLOTHOID_FIT_MAX_ITER)
+            return false;
+        const lsm_real det = J[0] * J[3] - J[1] * J[2];
+        if (!(lsm_fabs(det) > LSM_R(0.0)))
+            return false;
+        const bool ok = cl_fit_newton_step(f, dist, J, det, *F1, *F2, c, s);
+        (*it)++;
+        if (!ok)
+            return false;
+    }
+}
+
+/* The fallback when Newton stalls (near a fold of the two-variable problem, where its Jacobian is nearly singular
+ * and the damping takes ever smaller steps): the reduced residual F1(c(s), s) in the scan's bracket [sa, sb], by
+ * regula falsi with the Illinois modification and a bisection whenever CL_FIT_BISECT_EVERY steps did not halve the
+ * bracket. The reduced residual is continuous on the bracket and its turning |k0| s + |delta - k0 s| is convex in
+ * s, so below the cap at both ends and inside; the bracket at least halves every CL_FIT_BISECT_EVERY steps, so
+ * LSM_CLOTHOID_FIT_BRACKET_MAX_ITER steps narrow it to rounding. Ends converged, or with the bracket collapsed to
+ * CL_FIT_COLLAPSE_EPS eps of s (the root pinned to rounding: the better end is taken). */
+static bool cl_fit_bracket(cl_fit *f, lsm_real dist, lsm_real sa, lsm_real ra, lsm_real sb, lsm_real rb, lsm_real *c,
+                           lsm_real *s, lsm_real *F1, lsm_real *F2, int *steps)
+{
+    lsm_real w_ref = sb - sa;
+    int side = 0; /* which end moved last: -1 sa, +1 sb */
+    for (*steps = 1; *steps <= LSM_CLOTHOID_FIT_BRACKET_MAX_ITER; (*steps)++) {
+        lsm_real sn = (sa * rb - sb * ra) / (rb - ra);
+        if (*steps % CL_FIT_BISECT_EVERY == 0) {
+            if (sb - sa > LSM_R(0.5) * w_ref)
+                sn = LSM_R(0.5) * (sa + sb);
+            w_ref = sb - sa;
+        }
+        if (!(sn > sa && sn < sb))
+            sn = LSM_R(0.5) * (sa + sb);
+        const lsm_real cn = cl_fit_c_of_s(f, sn);
+        lsm_real G1, G2;
+        if (!cl_fit_eval(f, cn, sn, &G1, &G2, NULL))
+            return false; /* not expected: the bracket lies inside the domain */
+        *c = cn;
+        *s = sn;
+        *F1 = G1;
+        *F2 = G2;
+        if (G1 == LSM_R(0.0) || cl_fit_converged(f, dist, sn, G1, G2))
+            return true;
+        if ((G1 > LSM_R(0.0)) == (ra > LSM_R(0.0))) {
+            sa = sn;
+            ra = G1;
+            if (side == -1)
+                rb *= LSM_R(0.5);
+            side = -1;
+        } else {
+            sb = sn;
+            rb = G1;
+            if (side == 1)
+                ra *= LSM_R(0.5);
+            side = 1;
+        }
+        if (sb - sa <= CL_FIT_COLLAPSE_EPS * LSM_REAL_EPS * sb && sa > LSM_R(0.0))
+            return true; /* the last point lies within the collapsed bracket */
+    }
+    return false;
+}
+
+/* The result at (c, s): the end state from one more evaluation, and the residuals. */
+static void cl_fit_emit(const cl_fit *f, lsm_real c, lsm_real s, lsm_real F1, lsm_real F2,
+                        lsm_clothoid_fit_result *out)
+{
+    lsm_real mr[3], mi[3];
+    cl_pieces(f->th0, f->k0, c, s, 1, mr, mi, NULL);
+    out->c_per_mm2 = c;
+    out->s_mm = s;
+    out->end.x_mm = f->x0 + mr[0];
+    out->end.y_mm = f->y0 + mi[0];
+    out->end.theta_rad = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
+    out->end.kappa_per_mm = f->k0 + c * s;
+    out->residual_mm = lsm_fabs(F1);
+    out->residual_rad = lsm_fabs(F2);
+}
+
+lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm,
+                               lsm_real nx, lsm_real ny, lsm_clothoid_fit_result *out)
+{
+    if (start == NULL || out == NULL)
+        return LSM_E_NULL;
     cl_fit f;
-    f.x0 = start->x_mm;
-    f.y0 = start->y_mm;
-    f.th0 = start->theta_rad;
-    f.k0 = start->kappa_per_mm;
-    f.nx = nx / nn;
-    f.ny = ny / nn;
-    f.evals = 0;
-    const lsm_real px = f.x0 - qx_mm, py = f.y0 - qy_mm;
-    f.d0 = f.nx * px + f.ny * py;
-    const lsm_real d_err = LSM_R(16.0) * LSM_REAL_EPS * (lsm_fabs(f.nx * px) + lsm_fabs(f.ny * py) +
-                                                        lsm_fabs(f.nx * qx_mm) + lsm_fabs(f.ny * qy_mm));
+    lsm_real d_err;
+    lsm_status st = cl_fit_setup(start, qx_mm, qy_mm, nx, ny, &f, &d_err);
+    if (st != LSM_OK)
+        return st;
     out->iterations = 0;
     out->evaluations = 0;
-
-    if (lsm_fabs(f.d0) <= d_err) {
-        /* on the line: the only solution is s = 0, if the tangent is already along the normal */
-        lsm_real co, si;
-        lsm_sincos(f.th0, &si, &co);
-        const lsm_real cr = f.nx * si - f.ny * co;
-        if (lsm_fabs(cr) <= LSM_R(16.0) * LSM_REAL_EPS) {
-            out->c_per_mm2 = LSM_R(0.0);
-            out->s_mm = LSM_R(0.0);
-            out->end = *start;
-            out->residual_mm = lsm_fabs(f.d0);
-            out->residual_rad = lsm_fabs(cr);
-            return LSM_OK;
-        }
-        return LSM_E_FIT_ON_LINE;
-    }
+    out->bracket_steps = 0;
+    if (lsm_fabs(f.d0) <= d_err)
+        return cl_fit_on_line(&f, start, out);
     /* end tangent: the normal direction pointing across the line, on the branch within pi of theta0 */
     const lsm_real sg = f.d0 > LSM_R(0.0) ? LSM_R(-1.0) : LSM_R(1.0);
     const lsm_real th_t = lsm_atan2(sg * f.ny, sg * f.nx);
     f.delta = cl_wrap_pi(th_t - f.th0);
     const lsm_real dist = lsm_fabs(f.d0);
 
-    /* robust start: scan s geometrically for the first sign change of the reduced residual */
-    lsm_real sa = LSM_R(0.0), ra = f.d0, sb = LSM_R(0.0), rb = f.d0;
-    bool found = false;
-    for (int k = -4; k <= 24; k++) {
-        /* s = dist * 2^(k/2) */
-        lsm_real s = dist * ((k & 1) ? LSM_R(1.4142135623730951) : LSM_R(1.0));
-        int e = k >> 1; /* floor(k / 2) */
-        for (int i = 0; i < (e < 0 ? -e : e); i++)
-            s = e < 0 ? s * LSM_R(0.5) : s * LSM_R(2.0);
-        const lsm_real c = LSM_R(2.0) * (f.delta - f.k0 * s) / (s * s);
-        lsm_real F1, F2;
-        if (!cl_fit_eval(&f, c, s, &F1, &F2, NULL)) {
-            if (k > 0)
-                break; /* turning beyond the limit: stop searching */
-            continue;
-        }
-        if ((F1 > LSM_R(0.0)) != (f.d0 > LSM_R(0.0)) || F1 == LSM_R(0.0)) {
-            sb = s;
-            rb = F1;
-            found = true;
-            break;
-        }
-        sa = s;
-        ra = F1;
-    }
+    lsm_real sa, ra, sb, rb;
+    const bool found = cl_fit_scan(&f, dist, &sa, &ra, &sb, &rb);
     out->evaluations = f.evals;
     if (!found)
         return LSM_E_FIT_NO_SOLUTION;
+    /* Newton from the secant point of the bracket */
     lsm_real s = sa + (sb - sa) * ra / (ra - rb);
     if (!(s > LSM_R(0.0)))
         s = LSM_R(0.5) * sb;
-    lsm_real c = LSM_R(2.0) * (f.delta - f.k0 * s) / (s * s);
-
-    /* Newton on (c, s), damped */
-    lsm_real F1 = LSM_R(0.0), F2 = LSM_R(0.0), J[4];
-    int it = 0;
-    bool conv = false;
-    while (true) {
-        if (!cl_fit_eval(&f, c, s, &F1, &F2, J))
-            break;
-        const lsm_real tol1 = LSM_R(32.0) * LSM_REAL_EPS * (dist + s);
-        const lsm_real tol2 = LSM_R(32.0) * LSM_REAL_EPS * (LSM_R(1.0) + lsm_fabs(f.delta) + lsm_fabs(f.k0 * s));
-        if (lsm_fabs(F1) <= tol1 && lsm_fabs(F2) <= tol2) {
-            conv = true;
-            break;
-        }
-        if (it >= LSM_CLOTHOID_FIT_MAX_ITER)
-            break;
-        const lsm_real det = J[0] * J[3] - J[1] * J[2];
-        if (!(lsm_fabs(det) > LSM_R(0.0)))
-            break;
-        const lsm_real dc = (-F1 * J[3] + F2 * J[1]) / det;
-        const lsm_real dsv = (-F2 * J[0] + F1 * J[2]) / det;
-        const lsm_real m0 = (F1 / dist) * (F1 / dist) + F2 * F2;
-        lsm_real lam = LSM_R(1.0);
-        bool ok = false;
-        for (int h = 0; h < 30; h++, lam *= LSM_R(0.5)) {
-            const lsm_real cn = c + lam * dc, sn = s + lam * dsv;
-            lsm_real G1, G2;
-            if (!cl_fit_eval(&f, cn, sn, &G1, &G2, NULL))
-                continue;
-            const lsm_real m1 = (G1 / dist) * (G1 / dist) + G2 * G2;
-            if (m1 < m0 || m1 <= LSM_R(4.0) * LSM_REAL_EPS * LSM_REAL_EPS) {
-                c = cn;
-                s = sn;
-                ok = true;
-                break;
-            }
-        }
-        it++;
-        if (!ok)
-            break;
-    }
+    lsm_real c = cl_fit_c_of_s(&f, s);
+    lsm_real F1 = LSM_R(0.0), F2 = LSM_R(0.0);
+    int it = 0, steps = 0;
+    bool conv = cl_fit_newton(&f, dist, &c, &s, &F1, &F2, &it);
+    if (!conv)
+        conv = cl_fit_bracket(&f, dist, sa, ra, sb, rb, &c, &s, &F1, &F2, &steps);
     out->iterations = it;
+    out->bracket_steps = steps;
     out->evaluations = f.evals;
     if (!conv)
         return LSM_E_NOT_CONVERGED;
-    lsm_real mr[3], mi[3];
-    cl_pieces(f.th0, f.k0, c, s, 1, mr, mi, NULL);
-    out->c_per_mm2 = c;
-    out->s_mm = s;
-    out->end.x_mm = f.x0 + mr[0];
-    out->end.y_mm = f.y0 + mi[0];
-    out->end.theta_rad = f.th0 + s * (f.k0 + LSM_R(0.5) * c * s);
-    out->end.kappa_per_mm = f.k0 + c * s;
-    out->residual_mm = lsm_fabs(F1);
-    out->residual_rad = lsm_fabs(F2);
+    cl_fit_emit(&f, c, s, F1, F2, out);
     return LSM_OK;
 }
 

@@ -668,11 +668,29 @@ static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real 
     return LSM_OK;
 }
 
-lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                             lsm_corner_result *out)
+/* Tuning of the corner search (lsm_corner_smooth). */
+#define CN_TRIM_MAX_SHARE LSM_R(0.999)  /* a trim leaves at least 0.1 % of its block (no zero-length rest) */
+#define CN_PATH_DEV_COEF LSM_R(0.0235)  /* path distance of a curvature jump, about 0.0235 |dk| L^2 (docs/clothoid.md) */
+#define CN_TRIM_BACKOFF LSM_R(0.99)     /* a scale whose trims hit their limits: retry 1 % inside them */
+#define CN_TRIM_NEAR LSM_R(0.98)        /* trims within 2 % of their limits: the scale cannot grow much more */
+#define CN_BRACKET_CLOSED LSM_R(1.02)   /* scale bracket closed to 2 %: the accepted scale is as good as it gets */
+#define CN_MIN_SCALE_STEP LSM_R(1e-9)   /* a next scale below 1e-9 of the last: the search has collapsed */
+
+/* The corner in its plane: end of block 1 (v1, t1), start of block 2 (v2, t2) and the gap g between them, the
+ * frame (ex = t1, ey = n x ex; ey flipped so that the turn is a left turn), the blocks' signed in-plane curvatures
+ * k, block 2's start tangent in the frame (t2x, t2y) and the turning delta. */
+typedef struct {
+    const lsm_geom *bb[2];
+    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3];
+    lsm_real n[3], ex[3], ey[3];
+    lsm_real k[2];
+    lsm_real t2x, t2y, delta;
+    bool arc1, arc2;
+} cn_corner;
+
+/* Input checks: tolerance, trim limits, the blocks themselves, no rotary axes and no helices. */
+static lsm_status cn_check_input(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p)
 {
-    if (b1 == NULL || b2 == NULL || p == NULL || out == NULL)
-        return LSM_E_NULL;
     int fr = lsm_check_finite(p->tolerance_mm);
     if (fr != 0)
         return (lsm_status)fr;
@@ -685,7 +703,6 @@ lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_c
         st = cn_check_block(b2);
     if (st != LSM_OK)
         return st;
-    /* rotary axes and helices */
     const lsm_geom *bb[2] = {b1, b2};
     for (int i = 0; i < 2; i++) {
         if (bb[i]->kind == LSM_GEOM_LINE) {
@@ -696,152 +713,173 @@ lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_c
             return LSM_E_NONPLANAR;
         }
     }
+    return LSM_OK;
+}
 
-    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3];
-    lsm_geom_eval(b1, b1->len, v1, t1, NULL);
-    lsm_geom_eval(b2, LSM_R(0.0), v2, t2, NULL);
-    for (int i = 0; i < 3; i++)
-        g[i] = v2[i] - v1[i];
-    if (lsm_sqrt(dot3(g, g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
-        return LSM_E_GAP;
-
-    /* corner plane: normal n, frame ex = t1, ey = n x ex */
-    lsm_real n[3], w[3];
-    cross3(t1, t2, w);
+/* The corner's plane normal n: an arc's normal (the other block must lie in its plane), or t1 x t2 for two
+ * lines. */
+static lsm_status cn_corner_normal(cn_corner *cc)
+{
+    lsm_real w[3];
+    cross3(cc->t1, cc->t2, w);
     const lsm_real sw = lsm_sqrt(dot3(w, w));
-    const bool arc1 = b1->kind == LSM_GEOM_ARC, arc2 = b2->kind == LSM_GEOM_ARC;
-    if (arc1 || arc2) {
-        lsm_geom_normal(arc1 ? b1 : b2, n);
-        if (arc1 && arc2) {
+    if (cc->arc1 || cc->arc2) {
+        lsm_geom_normal(cc->arc1 ? cc->bb[0] : cc->bb[1], cc->n);
+        if (cc->arc1 && cc->arc2) {
             lsm_real n2[3], x[3];
-            lsm_geom_normal(b2, n2);
-            cross3(n, n2, x);
+            lsm_geom_normal(cc->bb[1], n2);
+            cross3(cc->n, n2, x);
             if (lsm_sqrt(dot3(x, x)) > CN_PLANAR_TOL)
                 return LSM_E_NONPLANAR;
         } else {
-            const lsm_real *tl = arc1 ? t2 : t1;
-            if (lsm_fabs(dot3(tl, n)) > CN_PLANAR_TOL)
+            const lsm_real *tl = cc->arc1 ? cc->t2 : cc->t1;
+            if (lsm_fabs(dot3(tl, cc->n)) > CN_PLANAR_TOL)
                 return LSM_E_NONPLANAR;
         }
-        if (lsm_fabs(dot3(g, n)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+        if (lsm_fabs(dot3(cc->g, cc->n)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
             return LSM_E_GAP;
     } else {
         if (!(sw > LSM_R(0.0)))
-            return dot3(t1, t2) > LSM_R(0.0) ? LSM_E_COLLINEAR : LSM_E_REVERSAL;
+            return dot3(cc->t1, cc->t2) > LSM_R(0.0) ? LSM_E_COLLINEAR : LSM_E_REVERSAL;
         for (int i = 0; i < 3; i++)
-            n[i] = w[i] / sw;
+            cc->n[i] = w[i] / sw;
     }
-    lsm_real ex[3] = {t1[0], t1[1], t1[2]}, ey[3];
-    cross3(n, ex, ey);
-    /* signed in-plane curvature about n */
-    lsm_real k[2];
+    return LSM_OK;
+}
+
+/* The frame, the signed in-plane curvatures about n, the orientation and the turning delta. */
+static lsm_status cn_corner_orient(cn_corner *cc)
+{
+    for (int i = 0; i < 3; i++)
+        cc->ex[i] = cc->t1[i];
+    cross3(cc->n, cc->ex, cc->ey);
     for (int i = 0; i < 2; i++) {
-        k[i] = LSM_R(0.0);
-        if (bb[i]->kind == LSM_GEOM_ARC) {
+        cc->k[i] = LSM_R(0.0);
+        if (cc->bb[i]->kind == LSM_GEOM_ARC) {
             lsm_real na[3];
-            lsm_geom_normal(bb[i], na);
-            const lsm_real sgn = (bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (dot3(na, n) > LSM_R(0.0)) ? LSM_R(1.0)
-                                                                                                     : LSM_R(-1.0);
-            k[i] = sgn / bb[i]->u.arc.radius_mm;
+            lsm_geom_normal(cc->bb[i], na);
+            const lsm_real sgn = (cc->bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (dot3(na, cc->n) > LSM_R(0.0))
+                                     ? LSM_R(1.0)
+                                     : LSM_R(-1.0);
+            cc->k[i] = sgn / cc->bb[i]->u.arc.radius_mm;
         }
     }
-    lsm_real t2x = dot3(t2, ex), t2y = dot3(t2, ey);
+    cc->t2x = dot3(cc->t2, cc->ex);
+    cc->t2y = dot3(cc->t2, cc->ey);
     /* orientation: make the turn a left turn (delta >= 0). A tangent joint (|delta| within the angle
      * epsilon) is oriented so that k2 <= k1 instead: the Newton start then picks the pair whose
      * curvature stays within [min, max] of k1, k2 in size (no overshoot; for a line and an arc of
      * radius R, kappa goes 0 -> -0.077/R -> 1/R rather than 0 -> 1.077/R -> 1/R, same deviation and
      * c_max), and the choice does not depend on the rounding of delta's sign. */
-    const bool tangent = lsm_fabs(t2y) <= (lsm_real)LSM_CORNER_ANGLE_EPS_RAD && t2x > LSM_R(0.0);
-    if (tangent ? k[1] > k[0] : t2y < LSM_R(0.0)) {
+    const bool tangent = lsm_fabs(cc->t2y) <= (lsm_real)LSM_CORNER_ANGLE_EPS_RAD && cc->t2x > LSM_R(0.0);
+    if (tangent ? cc->k[1] > cc->k[0] : cc->t2y < LSM_R(0.0)) {
         for (int i = 0; i < 3; i++)
-            ey[i] = -ey[i];
-        t2y = -t2y;
-        k[0] = -k[0];
-        k[1] = -k[1];
+            cc->ey[i] = -cc->ey[i];
+        cc->t2y = -cc->t2y;
+        cc->k[0] = -cc->k[0];
+        cc->k[1] = -cc->k[1];
     }
-    const lsm_real delta = lsm_atan2(t2y, t2x); /* in [-aeps, pi] */
+    cc->delta = lsm_atan2(cc->t2y, cc->t2x); /* in [-aeps, pi] */
     const lsm_real aeps = (lsm_real)LSM_CORNER_ANGLE_EPS_RAD;
-    const lsm_real kscale = lsm_fabs(k[0]) > lsm_fabs(k[1]) ? lsm_fabs(k[0]) : lsm_fabs(k[1]);
-    if (lsm_fabs(delta) <= aeps && lsm_fabs(k[1] - k[0]) <= CN_KAPPA_REL * kscale)
+    const lsm_real kscale = lsm_fabs(cc->k[0]) > lsm_fabs(cc->k[1]) ? lsm_fabs(cc->k[0]) : lsm_fabs(cc->k[1]);
+    if (lsm_fabs(cc->delta) <= aeps && lsm_fabs(cc->k[1] - cc->k[0]) <= CN_KAPPA_REL * kscale)
         return LSM_E_COLLINEAR;
-    if ((lsm_real)LSM_PI - delta <= aeps)
+    if ((lsm_real)LSM_PI - cc->delta <= aeps)
         return LSM_E_REVERSAL;
+    return LSM_OK;
+}
 
-    /* trim limits */
-    lsm_real dmax[2];
+/* The corner's geometry (cn_corner) from the two blocks: joint, gap, plane, frame, curvatures, turning. */
+static lsm_status cn_corner_setup(const lsm_geom *b1, const lsm_geom *b2, cn_corner *cc)
+{
+    cc->bb[0] = b1;
+    cc->bb[1] = b2;
+    lsm_geom_eval(b1, b1->len, cc->v1, cc->t1, NULL);
+    lsm_geom_eval(b2, LSM_R(0.0), cc->v2, cc->t2, NULL);
+    for (int i = 0; i < 3; i++)
+        cc->g[i] = cc->v2[i] - cc->v1[i];
+    if (lsm_sqrt(dot3(cc->g, cc->g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+        return LSM_E_GAP;
+    cc->arc1 = b1->kind == LSM_GEOM_ARC;
+    cc->arc2 = b2->kind == LSM_GEOM_ARC;
+    lsm_status st = cn_corner_normal(cc);
+    if (st != LSM_OK)
+        return st;
+    return cn_corner_orient(cc);
+}
+
+/* The longest trim of each block: the caller's limit (or the default share of the block), below the whole block,
+ * and on an arc at most LSM_CORNER_MAX_ARC_TRIM_RAD of turning. */
+static void cn_trim_limits(const cn_corner *cc, const lsm_corner_params *p, lsm_real dmax[2])
+{
     const lsm_real mt[2] = {p->max_trim1_mm, p->max_trim2_mm};
     for (int i = 0; i < 2; i++) {
-        dmax[i] = mt[i] > LSM_R(0.0) ? mt[i] : (lsm_real)LSM_CORNER_DEFAULT_TRIM_FRACTION * bb[i]->len;
-        if (dmax[i] > LSM_R(0.999) * bb[i]->len)
-            dmax[i] = LSM_R(0.999) * bb[i]->len;
-        if (k[i] != LSM_R(0.0) && lsm_fabs(k[i]) * dmax[i] > (lsm_real)LSM_CORNER_MAX_ARC_TRIM_RAD)
-            dmax[i] = (lsm_real)LSM_CORNER_MAX_ARC_TRIM_RAD / lsm_fabs(k[i]);
+        const lsm_geom *b = cc->bb[i];
+        dmax[i] = mt[i] > LSM_R(0.0) ? mt[i] : (lsm_real)LSM_CORNER_DEFAULT_TRIM_FRACTION * b->len;
+        if (dmax[i] > CN_TRIM_MAX_SHARE * b->len)
+            dmax[i] = CN_TRIM_MAX_SHARE * b->len;
+        if (cc->k[i] != LSM_R(0.0) && lsm_fabs(cc->k[i]) * dmax[i] > (lsm_real)LSM_CORNER_MAX_ARC_TRIM_RAD)
+            dmax[i] = (lsm_real)LSM_CORNER_MAX_ARC_TRIM_RAD / lsm_fabs(cc->k[i]);
     }
+}
 
-    const lsm_real eps = p->tolerance_mm;
-    const lsm_real target = eps * (LSM_R(1.0) - CN_MARGIN);
-    /* the symmetric line-line pair: X + iY = int_0^1 e^{i delta u^2/2} du */
-    lsm_real X, Y;
-    cn_unit_pair(delta, &X, &Y);
-    const lsm_real hc = lsm_cos(LSM_R(0.5) * delta), hs = lsm_sin(LSM_R(0.5) * delta);
-    const lsm_real ratio = X + Y * hs / hc; /* trim per unit half-length */
-
-    out->delta_rad = delta;
-    out->iterations = 0;
-    out->scales = 0;
-    out->limited = 0;
-    out->closed_form = 0;
-
-    if (!arc1 && !arc2) {
-        lsm_real L = target * hc / Y;
-        const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
-        if (L * ratio > dm) {
-            L = dm / ratio;
-            out->limited = 1;
-        }
-        const lsm_real d = L * ratio;
-        const lsm_real c = delta / (L * L);
-        lsm_real pa[3], pm[3];
-        for (int i = 0; i < 3; i++) {
-            pa[i] = v1[i] - t1[i] * d;
-            pm[i] = pa[i] + L * (X * ex[i] + Y * ey[i]);
-            out->p1_mm[i] = pa[i];
-            out->p2_mm[i] = v2[i] + t2[i] * d;
-        }
-        if (!(L > LSM_R(0.0)) || lsm_check_finite(c) != 0)
-            return LSM_E_CORNER_NO_SOLUTION; /* L underflowed or c overflowed */
-        cn_fill_clothoid(&out->trans[0], pa, ex, ey, LSM_R(0.0), LSM_R(0.0), c, L);
-        cn_fill_clothoid(&out->trans[1], pm, ex, ey, LSM_R(0.5) * delta, delta / L, -c, L);
-        out->trim1_mm = d;
-        out->trim2_mm = d;
-        out->vertex_dev_mm = L * Y / hc;
-        out->path_dev_mm = L * Y;
-        out->deviation_mm = out->vertex_dev_mm;
-        out->kappa_max_per_mm = delta / L;
-        out->sharpness_max_per_mm2 = c;
-        /* B ends on block 2 by symmetry (rounding only); what is left is the input's own gap */
-        out->gap_mm = lsm_sqrt(dot3(g, g));
-        out->gap_rad = LSM_R(0.0);
-        out->closed_form = 1;
-        out->scales = 1;
-        return LSM_OK;
+/* Two lines: the symmetric pair in closed form, X + iY = int_0^1 e^{i delta u^2/2} du, half-length L from the
+ * target deviation (or the trim limits), hc = cos(delta / 2), ratio = trim per unit half-length. */
+static lsm_status cn_line_line(const cn_corner *cc, const lsm_real dmax[2], lsm_real target, lsm_real X, lsm_real Y,
+                               lsm_real hc, lsm_real ratio, lsm_corner_result *out)
+{
+    const lsm_real delta = cc->delta;
+    lsm_real L = target * hc / Y;
+    const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
+    if (L * ratio > dm) {
+        L = dm / ratio;
+        out->limited = 1;
     }
+    const lsm_real d = L * ratio;
+    const lsm_real c = delta / (L * L);
+    lsm_real pa[3], pm[3];
+    for (int i = 0; i < 3; i++) {
+        pa[i] = cc->v1[i] - cc->t1[i] * d;
+        pm[i] = pa[i] + L * (X * cc->ex[i] + Y * cc->ey[i]);
+        out->p1_mm[i] = pa[i];
+        out->p2_mm[i] = cc->v2[i] + cc->t2[i] * d;
+    }
+    if (!(L > LSM_R(0.0)) || lsm_check_finite(c) != 0)
+        return LSM_E_CORNER_NO_SOLUTION; /* L underflowed or c overflowed */
+    cn_fill_clothoid(&out->trans[0], pa, cc->ex, cc->ey, LSM_R(0.0), LSM_R(0.0), c, L);
+    cn_fill_clothoid(&out->trans[1], pm, cc->ex, cc->ey, LSM_R(0.5) * delta, delta / L, -c, L);
+    out->trim1_mm = d;
+    out->trim2_mm = d;
+    out->vertex_dev_mm = L * Y / hc;
+    out->path_dev_mm = L * Y;
+    out->deviation_mm = out->vertex_dev_mm;
+    out->kappa_max_per_mm = delta / L;
+    out->sharpness_max_per_mm2 = c;
+    /* B ends on block 2 by symmetry (rounding only); what is left is the input's own gap */
+    out->gap_mm = lsm_sqrt(dot3(cc->g, cc->g));
+    out->gap_rad = LSM_R(0.0);
+    out->closed_form = 1;
+    out->scales = 1;
+    return LSM_OK;
+}
 
-    /* general case: frame origin V1 */
-    cn_ctx ctx;
-    ctx.delta = delta;
-    ctx.its = 0;
-    cn_setup_block(&ctx.b[0], b1, k[0], b1->len, dmax[0], LSM_R(0.0), LSM_R(0.0), LSM_R(1.0), LSM_R(0.0),
-                   LSM_R(-1.0));
-    /* both blocks meet at V1 in the frame: a gap between them (at most LSM_CORNER_GAP_TOL_MM, in float
-     * a few ulps of the coordinates) is left to gap_mm; kept in the frame, a lateral gap would be
-     * out of reach of the small transitions of nearly straight corners */
-    cn_setup_block(&ctx.b[1], b2, k[1], b2->len, dmax[1], LSM_R(0.0), LSM_R(0.0), t2x, t2y, LSM_R(1.0));
+/* The search over the scale L of the general case. */
+typedef struct {
+    lsm_real L, g1, g2;     /* the scale to try next and the Newton start of its trims */
+    lsm_real L_ok, L_bad;   /* the largest scale within the tolerance, the smallest beyond it or without solution */
+    lsm_real L_prev, D_prev; /* the last measurement */
+    lsm_real ma, mb;        /* the model D = ma L + mb L^2 */
+    lsm_real best_d1, best_d2, best_vd, best_pd; /* the solution at L_ok */
+    int scales;
+} cn_search;
 
-    /* first scale from the model D ~ a L + b L^2, aimed at the middle of the accepted band */
+/* First scale from the model D ~ a L + b L^2, aimed at the middle of the accepted band, within the trim limits. */
+static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc, const lsm_real dmax[2],
+                           lsm_real target, lsm_real Y, lsm_real hc, lsm_real ratio)
+{
     const lsm_real aim0 = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
     const lsm_real a = Y / hc;
-    const lsm_real bq = LSM_R(0.0235) * lsm_fabs(k[1] - k[0]);
+    const lsm_real bq = CN_PATH_DEV_COEF * lsm_fabs(cc->k[1] - cc->k[0]);
     lsm_real L;
     if (bq > LSM_R(0.0)) {
         const lsm_real disc = a * a + LSM_R(4.0) * bq * aim0;
@@ -853,118 +891,210 @@ lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_c
     const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
     if (L * rg > dm)
         L = dm / rg;
-    lsm_real g1, g2;
-    cn_guess(&ctx, L, ratio, &g1, &g2);
-
-    lsm_real L_ok = LSM_R(0.0), L_bad = LSM_REAL_MAX;
-    lsm_real D_prev = LSM_R(0.0), L_prev = LSM_R(0.0);
-    lsm_real best_d1 = LSM_R(0.0), best_d2 = LSM_R(0.0), best_vd = LSM_R(0.0), best_pd = LSM_R(0.0);
+    s->L = L;
+    cn_guess(ctx, L, ratio, &s->g1, &s->g2);
+    s->L_ok = LSM_R(0.0);
+    s->L_bad = LSM_REAL_MAX;
+    s->D_prev = LSM_R(0.0);
+    s->L_prev = LSM_R(0.0);
+    s->best_d1 = s->best_d2 = s->best_vd = s->best_pd = LSM_R(0.0);
     /* the model D = ma L + mb L^2, refitted to the measurements (only + - * / and sqrt, so that the
      * float build gives the same results on the host and on the Cortex-M4F) */
-    lsm_real ma = a, mb = bq;
-    int scales = 0;
-    bool done = false;
-    while (scales < CN_MAX_SCALES && !done) {
-        scales++;
-        lsm_real d1 = g1, d2 = g2;
-        lsm_real L_next;
-        if (!cn_solve(&ctx, L, &d1, &d2)) {
-            /* no solution here: smaller scale (the family folds at large L k) */
-            if (L < L_bad)
-                L_bad = L;
-            L_next = L_ok > LSM_R(0.0) ? lsm_sqrt(L_ok * L_bad) : LSM_R(0.5) * L;
-            cn_guess(&ctx, L_next, ratio, &g1, &g2);
-            if (L_ok > LSM_R(0.0)) {
-                g1 = best_d1 * L_next / L_ok;
-                g2 = best_d2 * L_next / L_ok;
-            }
-        } else if (d1 > ctx.b[0].dmax || d2 > ctx.b[1].dmax) {
-            if (L < L_bad)
-                L_bad = L;
-            lsm_real f1 = ctx.b[0].dmax / d1, f2 = ctx.b[1].dmax / d2;
-            L_next = L * LSM_R(0.99) * (f1 < f2 ? f1 : f2);
-            g1 = d1 * L_next / L;
-            g2 = d2 * L_next / L;
-        } else {
-            lsm_real vd, pd;
-            cn_measure(&ctx, &vd, &pd);
-            const lsm_real D = vd > pd ? vd : pd;
-            {
-                bool fitted = false;
-                if (L_prev > LSM_R(0.0) && L != L_prev) {
-                    /* through both measurements: D = a L + b L^2 */
-                    const lsm_real det = L * L_prev * (L_prev - L);
-                    const lsm_real na = (D * L_prev * L_prev - D_prev * L * L) / det;
-                    const lsm_real nb = (D_prev * L - D * L_prev) / det;
-                    if (na >= LSM_R(0.0) && nb >= LSM_R(0.0) && na + nb > LSM_R(0.0)) {
-                        ma = na;
-                        mb = nb;
-                        fitted = true;
-                    }
-                }
-                if (!fitted) { /* keep the shape, match the amplitude */
-                    const lsm_real f = D / (ma * L + mb * L * L);
-                    ma *= f;
-                    mb *= f;
-                }
-            }
-            L_prev = L;
-            D_prev = D;
-            /* how close the trims are to their limits (they grow about linearly with L) */
-            const lsm_real r1 = d1 / ctx.b[0].dmax, r2 = d2 / ctx.b[1].dmax;
-            const lsm_real rho = r1 > r2 ? r1 : r2;
-            if (D <= target) {
-                L_ok = L;
-                best_d1 = d1;
-                best_d2 = d2;
-                best_vd = vd;
-                best_pd = pd;
-                if (D >= CN_ACCEPT * target || rho >= LSM_R(0.98))
-                    break; /* the tolerance is used, or the trims are (nearly) at their limits */
-            } else if (L < L_bad) {
-                L_bad = L;
-            }
-            /* secant step in log-log, aiming slightly inside, but not past the trim limits */
-            const lsm_real aim = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
-            if (mb > LSM_R(0.0))
-                L_next = LSM_R(2.0) * aim / (ma + lsm_sqrt(ma * ma + LSM_R(4.0) * mb * aim));
-            else
-                L_next = aim / ma;
-            const lsm_real L_trim = L * LSM_R(0.99) / rho;
-            if (L_next > L_trim)
-                L_next = L_trim;
-            g1 = d1 * L_next / L;
-            g2 = d2 * L_next / L;
+    s->ma = a;
+    s->mb = bq;
+    s->scales = 0;
+}
+
+/* No transition at scale L: a smaller scale (the family folds at large L k), started from the accepted solution
+ * scaled if there is one. Returns the next scale. */
+static lsm_real cn_search_no_solution(const cn_ctx *ctx, cn_search *s, lsm_real ratio)
+{
+    const lsm_real L = s->L;
+    if (L < s->L_bad)
+        s->L_bad = L;
+    const lsm_real L_next = s->L_ok > LSM_R(0.0) ? lsm_sqrt(s->L_ok * s->L_bad) : LSM_R(0.5) * L;
+    cn_guess(ctx, L_next, ratio, &s->g1, &s->g2);
+    if (s->L_ok > LSM_R(0.0)) {
+        s->g1 = s->best_d1 * L_next / s->L_ok;
+        s->g2 = s->best_d2 * L_next / s->L_ok;
+    }
+    return L_next;
+}
+
+/* Refits the model D = ma L + mb L^2 to the measurement D at L: through both last measurements if that gives
+ * non-negative coefficients, else the same shape scaled to match. */
+static void cn_search_refit(cn_search *s, lsm_real L, lsm_real D)
+{
+    if (s->L_prev > LSM_R(0.0) && L != s->L_prev) {
+        const lsm_real L_prev = s->L_prev, D_prev = s->D_prev;
+        const lsm_real det = L * L_prev * (L_prev - L);
+        const lsm_real na = (D * L_prev * L_prev - D_prev * L * L) / det;
+        const lsm_real nb = (D_prev * L - D * L_prev) / det;
+        if (na >= LSM_R(0.0) && nb >= LSM_R(0.0) && na + nb > LSM_R(0.0)) {
+            s->ma = na;
+            s->mb = nb;
+            return;
         }
-        /* keep inside the bracket */
-        if (L_bad < LSM_REAL_MAX && L_next >= L_bad)
-            L_next = L_ok > LSM_R(0.0) ? lsm_sqrt(L_ok * L_bad) : LSM_R(0.5) * L_bad;
-        if (L_ok > LSM_R(0.0) && L_next <= L_ok)
-            L_next = L_bad < LSM_REAL_MAX ? lsm_sqrt(L_ok * L_bad) : LSM_R(2.0) * L_ok;
-        if (L_ok > LSM_R(0.0) && L_bad < LSM_REAL_MAX && L_bad <= L_ok * LSM_R(1.02))
-            done = true; /* bracket closed to 2 %: L_ok is as good as it gets */
-        if (!(L_next > LSM_R(0.0)) || L_next < LSM_R(1e-9) * L)
+    }
+    const lsm_real f = D / (s->ma * L + s->mb * L * L);
+    s->ma *= f;
+    s->mb *= f;
+}
+
+/* A transition with trims (d1, d2) within their limits at scale L: measure its deviation D, refit the model, keep
+ * it if D is within the target. False when it is accepted (the tolerance is used, or the trims are nearly at their
+ * limits); otherwise *L_next is the model's scale for the aim, not past the trim limits. */
+static bool cn_search_measure(cn_ctx *ctx, cn_search *s, lsm_real d1, lsm_real d2, lsm_real target, lsm_real *L_next)
+{
+    const lsm_real L = s->L;
+    lsm_real vd, pd;
+    cn_measure(ctx, &vd, &pd);
+    const lsm_real D = vd > pd ? vd : pd;
+    cn_search_refit(s, L, D);
+    s->L_prev = L;
+    s->D_prev = D;
+    /* how close the trims are to their limits (they grow about linearly with L) */
+    const lsm_real r1 = d1 / ctx->b[0].dmax, r2 = d2 / ctx->b[1].dmax;
+    const lsm_real rho = r1 > r2 ? r1 : r2;
+    if (D <= target) {
+        s->L_ok = L;
+        s->best_d1 = d1;
+        s->best_d2 = d2;
+        s->best_vd = vd;
+        s->best_pd = pd;
+        if (D >= CN_ACCEPT * target || rho >= CN_TRIM_NEAR)
+            return false; /* the tolerance is used, or the trims are (nearly) at their limits */
+    } else if (L < s->L_bad) {
+        s->L_bad = L;
+    }
+    /* secant step in log-log, aiming slightly inside, but not past the trim limits */
+    const lsm_real aim = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
+    lsm_real Ln;
+    if (s->mb > LSM_R(0.0))
+        Ln = LSM_R(2.0) * aim / (s->ma + lsm_sqrt(s->ma * s->ma + LSM_R(4.0) * s->mb * aim));
+    else
+        Ln = aim / s->ma;
+    const lsm_real L_trim = L * CN_TRIM_BACKOFF / rho;
+    if (Ln > L_trim)
+        Ln = L_trim;
+    s->g1 = d1 * Ln / L;
+    s->g2 = d2 * Ln / L;
+    *L_next = Ln;
+    return true;
+}
+
+/* Keeps the next scale inside the bracket (L_ok, L_bad). False when the search ends: the bracket closed, or the
+ * next scale collapsed. */
+static bool cn_search_advance(cn_search *s, lsm_real L_next)
+{
+    const lsm_real L = s->L;
+    bool done = false;
+    if (s->L_bad < LSM_REAL_MAX && L_next >= s->L_bad)
+        L_next = s->L_ok > LSM_R(0.0) ? lsm_sqrt(s->L_ok * s->L_bad) : LSM_R(0.5) * s->L_bad;
+    if (s->L_ok > LSM_R(0.0) && L_next <= s->L_ok)
+        L_next = s->L_bad < LSM_REAL_MAX ? lsm_sqrt(s->L_ok * s->L_bad) : LSM_R(2.0) * s->L_ok;
+    if (s->L_ok > LSM_R(0.0) && s->L_bad < LSM_REAL_MAX && s->L_bad <= s->L_ok * CN_BRACKET_CLOSED)
+        done = true; /* bracket closed: L_ok is as good as it gets */
+    if (!(L_next > LSM_R(0.0)) || L_next < CN_MIN_SCALE_STEP * L)
+        return false;
+    s->L = L_next;
+    return !done;
+}
+
+/* One scale of the search: solve for the trims at s->L, then choose the next scale. False when the search ends. */
+static bool cn_search_scale(cn_ctx *ctx, cn_search *s, lsm_real ratio, lsm_real target)
+{
+    const lsm_real L = s->L;
+    lsm_real d1 = s->g1, d2 = s->g2;
+    lsm_real L_next;
+    if (!cn_solve(ctx, L, &d1, &d2)) {
+        L_next = cn_search_no_solution(ctx, s, ratio);
+    } else if (d1 > ctx->b[0].dmax || d2 > ctx->b[1].dmax) {
+        if (L < s->L_bad)
+            s->L_bad = L;
+        lsm_real f1 = ctx->b[0].dmax / d1, f2 = ctx->b[1].dmax / d2;
+        L_next = L * CN_TRIM_BACKOFF * (f1 < f2 ? f1 : f2);
+        s->g1 = d1 * L_next / L;
+        s->g2 = d2 * L_next / L;
+    } else if (!cn_search_measure(ctx, s, d1, d2, target, &L_next)) {
+        return false;
+    }
+    return cn_search_advance(s, L_next);
+}
+
+/* The general case (an arc on either side): the scale search, then the accepted solution written out. */
+static lsm_status cn_general(const cn_corner *cc, const lsm_real dmax[2], lsm_real target, lsm_real Y, lsm_real hc,
+                             lsm_real ratio, lsm_corner_result *out)
+{
+    /* frame origin V1 */
+    cn_ctx ctx;
+    ctx.delta = cc->delta;
+    ctx.its = 0;
+    cn_setup_block(&ctx.b[0], cc->bb[0], cc->k[0], cc->bb[0]->len, dmax[0], LSM_R(0.0), LSM_R(0.0), LSM_R(1.0),
+                   LSM_R(0.0), LSM_R(-1.0));
+    /* both blocks meet at V1 in the frame: a gap between them (at most LSM_CORNER_GAP_TOL_MM, in float
+     * a few ulps of the coordinates) is left to gap_mm; kept in the frame, a lateral gap would be
+     * out of reach of the small transitions of nearly straight corners */
+    cn_setup_block(&ctx.b[1], cc->bb[1], cc->k[1], cc->bb[1]->len, dmax[1], LSM_R(0.0), LSM_R(0.0), cc->t2x, cc->t2y,
+                   LSM_R(1.0));
+    cn_search s;
+    cn_search_init(&s, &ctx, cc, dmax, target, Y, hc, ratio);
+    while (s.scales < CN_MAX_SCALES) {
+        s.scales++;
+        if (!cn_search_scale(&ctx, &s, ratio, target))
             break;
-        L = L_next;
     }
     out->iterations = (uint16_t)ctx.its;
-    out->scales = (uint8_t)scales;
-    if (!(L_ok > LSM_R(0.0)))
+    out->scales = (uint8_t)s.scales;
+    if (!(s.L_ok > LSM_R(0.0)))
         return ctx.its >= CN_MAX_NEWTON * CN_MAX_SCALES ? LSM_E_NOT_CONVERGED : LSM_E_CORNER_NO_SOLUTION;
-    if (ctx.L != L_ok || ctx.d1 != best_d1 || ctx.d2 != best_d2) {
+    if (ctx.L != s.L_ok || ctx.d1 != s.best_d1 || ctx.d2 != s.best_d2) {
         /* restore the accepted solution (series and residual) */
-        lsm_real d1 = best_d1, d2 = best_d2;
-        cn_residual(&ctx, L_ok, d1, d2, true, (lsm_real[4]){0});
+        lsm_real d1 = s.best_d1, d2 = s.best_d2;
+        cn_residual(&ctx, s.L_ok, d1, d2, true, (lsm_real[4]){0});
     }
     /* limited: the tolerance could not be used (trim limits, or no transition at larger scales) */
-    out->limited = (best_vd > best_pd ? best_vd : best_pd) < CN_ACCEPT * target ? 1 : 0;
-    st = cn_emit(&ctx, ex, ey, b1, b2, lsm_sqrt(dot3(g, g)), out);
+    out->limited = (s.best_vd > s.best_pd ? s.best_vd : s.best_pd) < CN_ACCEPT * target ? 1 : 0;
+    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], lsm_sqrt(dot3(cc->g, cc->g)), out);
     if (st != LSM_OK)
         return st;
-    out->vertex_dev_mm = best_vd;
-    out->path_dev_mm = best_pd;
-    out->deviation_mm = best_vd > best_pd ? best_vd : best_pd;
+    out->vertex_dev_mm = s.best_vd;
+    out->path_dev_mm = s.best_pd;
+    out->deviation_mm = s.best_vd > s.best_pd ? s.best_vd : s.best_pd;
     return LSM_OK;
+}
+
+lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
+                             lsm_corner_result *out)
+{
+    if (b1 == NULL || b2 == NULL || p == NULL || out == NULL)
+        return LSM_E_NULL;
+    lsm_status st = cn_check_input(b1, b2, p);
+    if (st != LSM_OK)
+        return st;
+    cn_corner cc;
+    st = cn_corner_setup(b1, b2, &cc);
+    if (st != LSM_OK)
+        return st;
+    lsm_real dmax[2];
+    cn_trim_limits(&cc, p, dmax);
+
+    const lsm_real eps = p->tolerance_mm;
+    const lsm_real target = eps * (LSM_R(1.0) - CN_MARGIN);
+    /* the symmetric line-line pair: X + iY = int_0^1 e^{i delta u^2/2} du */
+    lsm_real X, Y;
+    cn_unit_pair(cc.delta, &X, &Y);
+    const lsm_real hc = lsm_cos(LSM_R(0.5) * cc.delta), hs = lsm_sin(LSM_R(0.5) * cc.delta);
+    const lsm_real ratio = X + Y * hs / hc; /* trim per unit half-length */
+
+    out->delta_rad = cc.delta;
+    out->iterations = 0;
+    out->scales = 0;
+    out->limited = 0;
+    out->closed_form = 0;
+    if (!cc.arc1 && !cc.arc2)
+        return cn_line_line(&cc, dmax, target, X, Y, hc, ratio, out);
+    return cn_general(&cc, dmax, target, Y, hc, ratio, out);
 }
 
 lsm_status lsm_corner_apply(lsm_geom *b1, lsm_geom *b2, const lsm_corner_result *r)

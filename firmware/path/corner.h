@@ -62,32 +62,8 @@
 
 #include "geom.h"
 
-/* Largest distance between the end of block 1 and the start of block 2 (mm). */
-#ifndef LSM_CORNER_GAP_TOL_MM
-#define LSM_CORNER_GAP_TOL_MM 1e-3
-#endif
-/* Largest part of an arc's turning a trim may take (rad). */
-#ifndef LSM_CORNER_MAX_ARC_TRIM_RAD
-#define LSM_CORNER_MAX_ARC_TRIM_RAD 0.75
-#endif
-/* The scale search stops once the deviation is within [LSM_CORNER_ACCEPT, 1] of the tolerance (or the
- * trims limit the size). Closer to 1 uses more of the tolerance (lower curvature) at the price of
- * more iterations for corners with arcs. */
-#ifndef LSM_CORNER_ACCEPT
-#define LSM_CORNER_ACCEPT 0.9
-#endif
-/* Default trim limit, as a fraction of each block's length (two corners per block must fit). */
-#ifndef LSM_CORNER_DEFAULT_TRIM_FRACTION
-#define LSM_CORNER_DEFAULT_TRIM_FRACTION 0.49
-#endif
-/* Tangent angles closer than this are "the same direction" (collinear) or, from pi, a reversal. */
-#ifndef LSM_CORNER_ANGLE_EPS_RAD
-#if LSM_REAL_IS_FLOAT
-#define LSM_CORNER_ANGLE_EPS_RAD 1e-5
-#else
-#define LSM_CORNER_ANGLE_EPS_RAD 1e-9
-#endif
-#endif
+/* Compile-time settings (LSM_CORNER_GAP_TOL_MM, LSM_CORNER_MAX_ARC_TRIM_RAD, LSM_CORNER_ACCEPT,
+ * LSM_CORNER_DEFAULT_TRIM_FRACTION, LSM_CORNER_ANGLE_EPS_RAD): lsm_config.h. */
 
 typedef struct lsm_corner_params {
     lsm_real tolerance_mm;   /* eps > 0: largest deviation (see above) */

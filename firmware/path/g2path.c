@@ -3,9 +3,6 @@
 
 #include "lsm_math.h"
 
-#ifndef LSM_G2PATH_GAP_TOL_MM
-#define LSM_G2PATH_GAP_TOL_MM 1e-3
-#endif
 #if LSM_REAL_IS_FLOAT
 #define GP_PLANAR_TOL LSM_R(1e-5)
 #else

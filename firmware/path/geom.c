@@ -201,8 +201,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
                 u1 -= su, v1 -= sv, u2 -= su, v2 -= sv;
                 for (int i = 0; i < 3; i++)
                     cshift[i] = su * e1[i] + sv * e2[i];
-                r1 = lsm_sqrt(u1 * u1 + v1 * v1);
-                r2 = lsm_sqrt(u2 * u2 + v2 * v2);
+                r1 = lsm_sqrt(u1 * u1 + v1 * v1); /* the radius kept (the end's, r2, is equal up to rounding) */
             }
         }
     }

@@ -37,11 +37,7 @@
 #include "lsm_config.h"
 #include "status.h"
 
-/* Arc construction from end points: largest |r_start - r_end| accepted (mm). The arc keeps the
- * start radius, so its end lies at most this far from the programmed end. */
-#ifndef LSM_GEOM_ARC_TOL_MM
-#define LSM_GEOM_ARC_TOL_MM 0.03
-#endif
+/* Compile-time settings (LSM_GEOM_ARC_TOL_MM): lsm_config.h. */
 
 typedef enum lsm_geom_kind {
     LSM_GEOM_LINE = 1,

@@ -112,22 +112,8 @@
 /* Phases of one piece: lead cruise, ramp A (7), cruise, ramp B (7), trail cruise. */
 #define LSM_PIECE_PHASES 17
 
-/* Defaults of lsm_planner_config (each overridable from a project config). */
-#ifndef LSM_PLANNER_CAP_MARGIN
-#define LSM_PLANNER_CAP_MARGIN 0.9 /* rho: share of A and J the path's curvature may use at the cap */
-#endif
-#ifndef LSM_PLANNER_NODE_HYST
-#define LSM_PLANNER_NODE_HYST 0.05 /* a valley is a node if it is this much (relative) below its surroundings */
-#endif
-#ifndef LSM_PLANNER_NODE_DROP
-#define LSM_PLANNER_NODE_DROP 0.25 /* a drop of the cap by this much (relative) from one block to the next is a node */
-#endif
-#ifndef LSM_PLANNER_FIT_SHARE
-#define LSM_PLANNER_FIT_SHARE 0.5 /* share of the blend tolerance for fitting arcs through dense polylines */
-#endif
-#ifndef LSM_PLANNER_TRIM_SHARE
-#define LSM_PLANNER_TRIM_SHARE 0.5 /* largest part of a block one corner transition may take */
-#endif
+/* Compile-time settings (LSM_PLANNER_CAP_MARGIN, LSM_PLANNER_NODE_HYST, LSM_PLANNER_NODE_DROP,
+ * LSM_PLANNER_FIT_SHARE, LSM_PLANNER_TRIM_SHARE): lsm_config.h. */
 
 /* Block flags. */
 enum {

@@ -26,11 +26,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "lsm_config.h"
 #include "status.h"
 
-#ifndef LSM_MAX_AXES
-#define LSM_MAX_AXES 6
-#endif
+/* Compile-time settings (LSM_MAX_AXES): lsm_config.h. */
 #define LSM_FIX_PHASES 15
 #define LSM_FIX_MAX_RAMP_CYCLES 16384u
 

@@ -2,10 +2,6 @@
 
 #include "lsm_math.h"
 
-/* Largest |distance| accepted on one axis (mm); beyond it positions lose meaning in float. */
-#ifndef LSM_MAX_DISTANCE_MM
-#define LSM_MAX_DISTANCE_MM 1.0e7 /* mm (10 km) */
-#endif
 /* Largest number of cycles in one move (fits the 32-bit cycle counters with margin). */
 #define LSM_MOVE_MAX_CYCLES 0x40000000u
 #define FIT_MAX_ITER 64

@@ -478,5 +478,5 @@ int main(int argc, char **argv)
         cmocka_unit_test_setup(test_telemetry, setup),
         cmocka_unit_test(test_lossy_channel),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

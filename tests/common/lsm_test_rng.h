@@ -19,6 +19,12 @@ static inline double test_urand(uint64_t *st)
     return (double)((*st * 2685821657736338717ull) >> 11) / 9007199254740992.0;
 }
 
+/* Uniform in [lo, hi). */
+static inline double test_uni(uint64_t *st, double lo, double hi)
+{
+    return lo + (hi - lo) * test_urand(st);
+}
+
 /* Log-uniform in [lo, hi). */
 static inline double test_logu(uint64_t *st, double lo, double hi)
 {
@@ -40,6 +46,17 @@ static inline unsigned long long test_arg_u(int argc, char **argv, int k, unsign
         exit(2);
     }
     return v;
+}
+
+/* The end of a randomized test's main: passes rc (cmocka_run_group_tests' result) through and, when a test
+ * failed, prints the seed and count and the command that replays the run (the failing case's own message names
+ * its index). */
+static inline int test_seed_finish(const char *prog, unsigned long long seed, unsigned long long count, int rc)
+{
+    if (rc != 0)
+        fprintf(stderr, "%s: %d failed with seed %llu, count %llu; replay: %s %llu %llu\n", prog, rc, seed, count,
+                prog, seed, count);
+    return rc;
 }
 
 #endif

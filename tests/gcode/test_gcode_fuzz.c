@@ -290,5 +290,7 @@ int main(int argc, char **argv)
     g_seed = (uint64_t)test_arg_u(argc, argv, 1, g_seed);
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_fuzz)};
-    return cmocka_run_group_tests_name(LSM_REAL_IS_FLOAT ? "gcode_fuzz_float" : "gcode_fuzz", tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count,
+                            cmocka_run_group_tests_name(LSM_REAL_IS_FLOAT ? "gcode_fuzz_float" : "gcode_fuzz", tests,
+                                                        NULL, NULL));
 }

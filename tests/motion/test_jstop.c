@@ -16,6 +16,8 @@
 
 #include <cmocka.h>
 
+#include "lsm_test_rng.h"
+
 #include "axprof.h"
 #include "jstop.h"
 
@@ -35,13 +37,7 @@
 
 static unsigned g_seed = 1, g_count = 3000;
 
-static double urand(uint64_t *s)
-{
-    *s ^= *s << 13;
-    *s ^= *s >> 7;
-    *s ^= *s << 17;
-    return (double)(*s >> 11) / 9007199254740992.0;
-}
+#define urand test_urand /* the shared generator (tests/common/lsm_test_rng.h) */
 
 /* Runs a stop from (p, v, a, j) to its end; checks the limits cycle by cycle, the sampled jerk change also from
  * the starting jerk j to the first sample. Returns the number of cycles. */
@@ -256,14 +252,12 @@ static void test_prof_move_and_stop(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = (unsigned)strtoul(argv[1], NULL, 0);
-    if (argc > 2)
-        g_count = (unsigned)strtoul(argv[2], NULL, 0);
+    g_seed = (unsigned)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (unsigned)test_arg_u(argc, argv, 2, g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_constant_jerk_limit), cmocka_unit_test(test_decel_plateau),
         cmocka_unit_test(test_at_rest), cmocka_unit_test(test_random_states),
         cmocka_unit_test(test_prof_move_and_stop),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

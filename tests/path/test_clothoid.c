@@ -2,7 +2,7 @@
  * test_clothoid.c: Fresnel integrals, clothoid evaluation, incremental stepping and the section-IV fit
  * (firmware/path/clothoid.h).
  *
- *   test_clothoid [seed] [count]      (default: seed 1, count 3000 random integrals and fits)
+ *   test_clothoid [seed] [count]      (default: seed 1, count 3000 random integrals and fits; 10x passes too)
  *
  * References are independent of the code under test: Fresnel values computed with mpmath at 30
  * digits, and the clothoid integral by composite Gauss-Legendre quadrature in long double (nodes
@@ -34,14 +34,9 @@ static unsigned long g_seed = 1;
 static long g_count = 3000;
 static uint64_t g_rng;
 
-static double urand(void)
-{
-    g_rng ^= g_rng >> 12;
-    g_rng ^= g_rng << 25;
-    g_rng ^= g_rng >> 27;
-    return (double)((g_rng * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
-}
-static double uni(double a, double b) { return a + (b - a) * urand(); }
+/* the shared generator (lsm_test_rng.h) on this test's state */
+static double urand(void) { return test_urand(&g_rng); }
+static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
 static double logu(double a, double b) { return exp(uni(log(a), log(b))); }
 
 /* ---- reference quadrature ---- */
@@ -548,9 +543,11 @@ static void check_fit(const lsm_clothoid_state *s0, double A, double B, double C
     const double cross = (cos(th) * B - sin(th) * A) / h; /* tangent x normal */
     const double scale = fabs(A * s0->x_mm + B * s0->y_mm + C) / h + r->s_mm;
     const double tol = IS_F ? 2e-5 : 1e-10;
-    if (!(dist <= tol * scale && fabs(cross) <= tol * 10 && r->s_mm > 0 && r->iterations <= LSM_CLOTHOID_FIT_MAX_ITER)) {
-        print_error("fit %ld (seed %lu): dist %.3g (scale %.3g), cross %.3g, s %.6g, c %.6g, it %d\n", n, g_seed, dist,
-                    scale, cross, (double)r->s_mm, (double)r->c_per_mm2, r->iterations);
+    if (!(dist <= tol * scale && fabs(cross) <= tol * 10 && r->s_mm > 0 && r->iterations <= LSM_CLOTHOID_FIT_MAX_ITER &&
+          r->bracket_steps <= LSM_CLOTHOID_FIT_BRACKET_MAX_ITER)) {
+        print_error("fit %ld (seed %lu): dist %.3g (scale %.3g), cross %.3g, s %.6g, c %.6g, it %d, bracket %d\n", n,
+                    g_seed, dist, scale, cross, (double)r->s_mm, (double)r->c_per_mm2, r->iterations,
+                    r->bracket_steps);
         fail();
     }
     assert_true(fabs(r->end.x_mm - x) <= tol * scale && fabs(r->end.y_mm - y) <= tol * scale);
@@ -590,7 +587,7 @@ static void test_fit_random(void **state)
 {
     (void)state;
     g_rng = 0x13198A2E03707344ull ^ (uint64_t)g_seed;
-    long solved = 0, aimed = 0, aimed_solved = 0, it_total = 0, it_max = 0;
+    long solved = 0, aimed = 0, aimed_solved = 0, it_total = 0, it_max = 0, fallbacks = 0, bracket_max = 0;
     for (long n = 0; n < g_count; n++) {
         lsm_clothoid_state s0 = {(lsm_real)uni(-50, 50), (lsm_real)uni(-50, 50), (lsm_real)uni(-PI, PI),
                                  (lsm_real)((urand() < 0.3 ? 0 : 1) * uni(-0.1, 0.1))};
@@ -625,6 +622,9 @@ static void test_fit_random(void **state)
             it_total += r.iterations;
             if (r.iterations > it_max)
                 it_max = r.iterations;
+            fallbacks += r.bracket_steps > 0;
+            if (r.bracket_steps > bracket_max)
+                bracket_max = r.bracket_steps;
         } else if (st != LSM_E_FIT_NO_SOLUTION) {
             print_error("fit %ld (seed %lu): status %d (%s)\n", n, g_seed, (int)st, lsm_status_str(st));
             fail();
@@ -633,9 +633,31 @@ static void test_fit_random(void **state)
             fail();
         }
     }
-    print_message("fit: %ld of %ld solved (%ld of %ld aimed), Newton iterations mean %.2f max %ld\n", solved,
-                  g_count, aimed_solved, aimed, solved ? (double)it_total / solved : 0.0, it_max);
+    print_message("fit: %ld of %ld solved (%ld of %ld aimed), Newton iterations mean %.2f max %ld, %ld bracketed "
+                  "(steps max %ld)\n",
+                  solved, g_count, aimed_solved, aimed, solved ? (double)it_total / solved : 0.0, it_max, fallbacks,
+                  bracket_max);
     assert_true(aimed_solved == aimed);
+}
+
+/* Issue 14 item 8: fit 12560 of seed 1 (the random generator's case, as built in double): damped Newton stalls
+ * near a fold (40 iterations, merit decreasing by ever smaller steps) and the bracketed fallback solves it. */
+static void test_fit_newton_stall(void **state)
+{
+    (void)state;
+    const lsm_clothoid_state s0 = {(lsm_real)2.2955060213834528, (lsm_real)-49.458438263876111,
+                                   (lsm_real)-0.25613082619075822, (lsm_real)-0.0033990664679933447};
+    const double A = -16.670062181883733, B = 44.804071438268572, C = 2150.4717230458327;
+    lsm_clothoid_fit_result r;
+    const lsm_status st = lsm_clothoid_fit_line(&s0, (lsm_real)A, (lsm_real)B, (lsm_real)C, &r);
+    if (st != LSM_OK) {
+        print_error("stalled fit: status %d (%s), it %d, bracket %d\n", (int)st, lsm_status_str(st), r.iterations,
+                    r.bracket_steps);
+        fail();
+    }
+    check_fit(&s0, A, B, C, &r, 12560);
+    assert_int_equal(r.iterations, LSM_CLOTHOID_FIT_MAX_ITER); /* Newton did stall: the fallback is what is tested */
+    assert_true(r.bracket_steps > 0);
 }
 
 static void test_fit_bad_input(void **state)
@@ -675,7 +697,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_local_fast),        cmocka_unit_test(test_stepper_large_steps),
         cmocka_unit_test(test_stepper_start),
         cmocka_unit_test(test_fit_lines),         cmocka_unit_test(test_fit_random),
+        cmocka_unit_test(test_fit_newton_stall),
         cmocka_unit_test(test_fit_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -43,14 +43,9 @@ static unsigned long g_seed = 1;
 static long g_count = 600;
 static uint64_t g_rng;
 
-static double urand(void)
-{
-    g_rng ^= g_rng >> 12;
-    g_rng ^= g_rng << 25;
-    g_rng ^= g_rng >> 27;
-    return (double)((g_rng * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
-}
-static double uni(double a, double b) { return a + (b - a) * urand(); }
+/* the shared generator (lsm_test_rng.h) on this test's state */
+static double urand(void) { return test_urand(&g_rng); }
+static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
 static double logu(double a, double b) { return exp(uni(log(a), log(b))); }
 
 static double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -870,5 +865,5 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_scaling),      cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_apply_and_limits), cmocka_unit_test(test_random_corners),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -41,14 +41,9 @@ static long g_count = 40;
 static uint64_t g_rng;
 static lsm_clothoid g_out[CAP];
 
-static double urand(void)
-{
-    g_rng ^= g_rng >> 12;
-    g_rng ^= g_rng << 25;
-    g_rng ^= g_rng >> 27;
-    return (double)((g_rng * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
-}
-static double uni(double a, double b) { return a + (b - a) * urand(); }
+/* the shared generator (lsm_test_rng.h) on this test's state */
+static double urand(void) { return test_urand(&g_rng); }
+static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
 
 /* ---- independent end state of a clothoid (Gauss-Legendre, 12 nodes, panels turning <= 0.1 rad) ---- */
 #define GL_N 12
@@ -337,5 +332,5 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_paper_reproduction), cmocka_unit_test(test_scaling), cmocka_unit_test(test_auto),
         cmocka_unit_test(test_random_contours),    cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

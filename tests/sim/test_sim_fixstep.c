@@ -124,5 +124,5 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_integer_matches_double),
         cmocka_unit_test(test_compile_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

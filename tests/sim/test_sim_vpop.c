@@ -415,14 +415,12 @@ static void test_run_random_program(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoull(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (uint64_t)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_line_closed_form), cmocka_unit_test(test_fig3),
         cmocka_unit_test(test_trident_bspline), cmocka_unit_test(test_random_bsplines),
         cmocka_unit_test(test_run_trident), cmocka_unit_test(test_run_random_program),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

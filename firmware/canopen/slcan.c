@@ -66,7 +66,7 @@ static bool parse_frame(const char *l, unsigned len, lsm_can_frame *f)
     f->flags = (uint8_t)((ext ? LSM_CAN_FLAG_EXT : 0u) | (rtr ? LSM_CAN_FLAG_RTR : 0u));
     for (unsigned i = 0u; i < data_digits / 2u; i++) {
         uint32_t b;
-        if (!parse_hex(l + 2u + id_digits + 2u * i, 2u, &b))
+        if (!parse_hex(l + 2u + id_digits + (size_t)2u * i, 2u, &b))
             return false;
         f->data[i] = (uint8_t)b;
     }

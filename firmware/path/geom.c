@@ -499,7 +499,7 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
         lsm_real n[3];
         geom_arc_normal(a, n);
 #if LSM_REAL_IS_FLOAT
-        lsm_real p[LSM_MAX_AXES];
+        lsm_real p[LSM_MAX_AXES] = {0};
         (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
         for (int i = 0; i < 3; i++)
             a->start_mm[i] = p[i];

@@ -343,16 +343,15 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     corner_try ct;
     ct.corner = ct.stop = false;
     lsm_geom g_orig = *g, prev_orig = *g;
-    if (!has_prev) {
-        flags |= LSM_PB_STOP; /* nothing before: start from rest */
-    } else if (pl->tail_tol_mm > R0 && lines_collinear(&prev->g, g)) {
+    const bool blend = has_prev && pl->tail_tol_mm > R0; /* G64 after a block */
+    if (blend && lines_collinear(&prev->g, g)) {
         /* joins G2 as it is */
-    } else if (pl->tail_tol_mm > R0 && !pl->tail_rotary && !geom_moves_rotary(g)) {
+    } else if (blend && !pl->tail_rotary && !geom_moves_rotary(g)) {
         try_corner(pl, prev, g, fit_err, &ct);
         if (ct.stop)
             flags |= LSM_PB_STOP;
     } else {
-        flags |= LSM_PB_STOP;
+        flags |= LSM_PB_STOP; /* nothing before (start from rest), G61, or a rotary move: an exact stop */
     }
     const bool corner = ct.corner;
     if ((flags & LSM_PB_STOP) && has_prev)

@@ -331,38 +331,38 @@ typedef enum lsm_piece_mode {
 } lsm_piece_mode;
 
 /*
- * Plan the piece that starts at (blk, off_mm) with speed v0_mm_s (a = 0 there). Errors: LSM_E_NULL,
+ * Plan the piece that starts at block id0, off0 mm into it, with speed v0 mm/s (a = 0 there). Errors: LSM_E_NULL,
  * LSM_E_EMPTY (nothing to move: at the end of the buffer), LSM_E_INFEASIBLE (HOLD: no stop fits yet; REPLAN: no
  * verified piece found; follow the current plan and retry), LSM_E_INTERNAL (NORMAL: no verified plan; a fallback
  * piece that stops is returned and counted in stats.plan_fallbacks). Background (lsm_interp_prepare); the
  * interpolator's cycle calls it only in a synchronous loop (interp.h, tick_plans).
  */
-lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
-                                  lsm_piece_mode mode, lsm_piece *out);
+lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, lsm_piece_mode mode,
+                                  lsm_piece *out);
 
-/* The interpolator is committed up to (blk, off_mm), the first point where it can take a new piece (a = 0), at
+/* The interpolator is committed up to (block id, off_mm), the first point where it can take a new piece (a = 0), at
  * speed v_mm_s there, and its current piece ends at the start of block end_blk (the tail: the end of the buffer)
  * at speed end_v_mm_s. The planner modifies nothing before that point. An append that invalidates the current
  * piece (a corner that trims the block it ends in, or a W of its end node that falls below end_v_mm_s) is only kept
  * if a verified piece from (blk, off_mm) at v_mm_s exists (else the junction becomes an exact stop, which restores
  * the previous plan), and then marks the piece stale (lsm_planner_piece_stale): the interpolator must take a new
  * piece there. Background; the interpolator posts it from the cycle instead (lsm_planner_post_horizon). */
-void lsm_planner_set_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+void lsm_planner_set_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
                              lsm_real end_v_mm_s);
 
-/* Blocks before id `blk` are no longer needed (their slots are freed). Background (the tick posts it:
+/* Blocks before `id` are no longer needed (their slots are freed). Background (the tick posts it:
  * lsm_planner_post_release). */
-void lsm_planner_release(lsm_planner *pl, uint32_t blk);
+void lsm_planner_release(lsm_planner *pl, uint32_t id);
 
 /* Runs the backward pass now (append runs it too; exposed for benchmarks). Background. */
 void lsm_planner_update(lsm_planner *pl);
 
 /* ---- the tick's requests (lsm_planner_req) ---- */
 
-/* Control cycle: the tick is done with the blocks before `blk` (only a later id than posted before counts). */
-void lsm_planner_post_release(lsm_planner *pl, uint32_t blk);
+/* Control cycle: the tick is done with the blocks before `id` (only a later id than posted before counts). */
+void lsm_planner_post_release(lsm_planner *pl, uint32_t id);
 /* Control cycle: the commitment horizon, as lsm_planner_set_horizon. */
-void lsm_planner_post_horizon(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
+void lsm_planner_post_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
                               lsm_real end_v_mm_s);
 /* Control cycle: the tick runs a piece planned when lsm_planner_stale_count was `stale_seen`. */
 void lsm_planner_post_stale_ack(lsm_planner *pl, uint32_t stale_seen);

@@ -524,6 +524,8 @@ int cmd_experiment(int argc, char **argv)
     const bool json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "experiment kombarov"))
         return 2;
+    if (out && cli_check_out_dir("out", out))
+        return 2;
     if (!(D > 0 && D <= 1000)) {
         fprintf(stderr, "error: --distance must be in (0, 1000] mm\n");
         return 2;

@@ -302,6 +302,9 @@ int cmd_smooth(int argc, char **argv)
         fprintf(stderr, "error: smooth: --amax and --jmax must be finite numbers > 0\n");
         return 1;
     }
+    if (cli_check_range("amax", amax, CLI_LIMIT_MIN, CLI_ACC_MAX) ||
+        cli_check_range("jmax", jmax, CLI_LIMIT_MIN, CLI_JERK_MAX) || cli_check_regular_file("--gcode", path))
+        return 1;
     sm_block *b = NULL;
     int n = 0;
     if (sm_read_gcode(path, &b, &n) != 0)

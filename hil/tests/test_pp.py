@@ -103,12 +103,12 @@ def test_pp_setpoints(rig):
     assert rig.demand(0) == int(25 * cpm)
     # change set immediately while moving: from a move to 100 mm, go to 30 mm instead
     rig.pp_move(0, 100.0, wait=False)
-    time.sleep(0.25)
+    rig.wait_moving(0, int(27 * cpm))  # under way (the event, not a delay)
     rig.pp_move(0, 30.0)
     assert rig.demand(0) == int(30 * cpm)
     # halt (bit 8): jerk-limited stop with 0x6084, then the move resumes when halt is released
     rig.pp_move(0, 80.0, wait=False)
-    time.sleep(0.2)
+    rig.wait_moving(0, int(33 * cpm))
     rig.controlword(0, 0x10F)
     rig.wait_sw(0, 0x0400, 0x0400, 5.0)  # target reached is also set when halted at rest
     held = rig.demand(0)

@@ -103,12 +103,17 @@ def test_pp_setpoints(rig):
     assert rig.demand(0) == int(25 * cpm)
     # change set immediately while moving: from a move to 100 mm, go to 30 mm instead
     rig.pp_move(0, 100.0, wait=False)
-    rig.wait_moving(0, int(27 * cpm))  # under way (the event, not a delay)
+    # under way, past 30 mm (the event; where the former 0.25 s delay put it on an idle machine, about 42 mm).
+    # Known bug, not this test's: a change of set-point while still accelerating (at 27 mm: 2 mm from the start,
+    # the new target 3 mm ahead) overshoots, v 105.4 > 100 mm/s (docs/reliability.md)
+    rig.wait_moving(0, int(40 * cpm))
     rig.pp_move(0, 30.0)
     assert rig.demand(0) == int(30 * cpm)
     # halt (bit 8): jerk-limited stop with 0x6084, then the move resumes when halt is released
     rig.pp_move(0, 80.0, wait=False)
-    rig.wait_moving(0, int(33 * cpm))
+    # past the acceleration (the former 0.2 s delay: about 40 mm). Known bug: a halt while still accelerating
+    # (at 33 mm) exceeds the snap limit, 1.3e7 > 2e6 mm/s^4 (docs/reliability.md)
+    rig.wait_moving(0, int(40 * cpm))
     rig.controlword(0, 0x10F)
     rig.wait_sw(0, 0x0400, 0x0400, 5.0)  # target reached is also set when halted at rest
     held = rig.demand(0)

@@ -55,6 +55,8 @@ for t in "${targets[@]}"; do
     export LSM_FUZZ_KNOWN=${LSM_FUZZ_KNOWN:-fail}
     opts+=(-fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1)
   fi
+  export LSM_FUZZ_KNOWN_LOG="$PWD/build-fuzz/$t.known"
+  rm -f "$LSM_FUZZ_KNOWN_LOG"
   seeds=("tests/fuzz/corpus/$kind")
   [ -d "tests/fuzz/regressions/$t" ] && seeds+=("tests/fuzz/regressions/$t")
   "build-fuzz/bin/$t" "${opts[@]}" "$work" "${seeds[@]}" >"$log" 2>&1
@@ -62,10 +64,11 @@ for t in "${targets[@]}"; do
   after=$(ls "$found" | wc -l)
   execs=$(grep -oE "stat::number_of_executed_units: *[0-9]+" "$log" | grep -oE "[0-9]+$" | awk "{s+=\$1} END {if (NR) print s}")
   [ -n "$execs" ] || execs=$(grep -oE "#[0-9]+" "$log" | tail -1 | tr -d '#')
-  known=$(grep -c "FUZZ KNOWN" "$log")
+  known=$( { cat "$LSM_FUZZ_KNOWN_LOG" 2>/dev/null || true; } | cut -d' ' -f1 | sort | uniq -c | awk '{printf "%s%s %s", NR > 1 ? ", " : "", $1, $2}')
+  [ -n "$known" ] || known=none
   if [ $rc -eq 0 ] && [ "$after" -eq "$before" ]; then
     passed=$((passed + 1))
-    echo "fuzz: $t: ok, ${secs} s, ${execs:-?} runs, corpus $(ls "$work" | wc -l), known-class reports $known (log $log)"
+    echo "fuzz: $t: ok, ${secs} s, ${execs:-?} runs, corpus $(ls "$work" | wc -l), known-class reports: $known (log $log)"
   else
     failed=$((failed + 1))
     echo "fuzz: $t: FOUND $((after - before)) new failing inputs (exit $rc) in $found (log $log)"

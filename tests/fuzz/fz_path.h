@@ -18,6 +18,7 @@
  * planner issue) are being fixed by others. With LSM_FUZZ_KNOWN=report in the environment, those four classes
  * are printed (the first few) and counted instead of aborting, so a short fuzzing run can look for everything
  * else; nan, a status that is not allowed, a sanitizer report or a stall is always fatal. Default: all fatal.
+ * LSM_FUZZ_KNOWN_LOG=FILE appends one line per reported known violation (scripts/fuzz.sh counts them).
  */
 #ifndef FZ_PATH_H
 #define FZ_PATH_H
@@ -84,6 +85,14 @@ static void fz_known(int kind, const char *fmt, ...)
     va_end(ap);
     if (!g_fz_known_mode)
         fz_fatal("%s: %s", k_fz_known_names[kind], msg);
+    const char *logp = getenv("LSM_FUZZ_KNOWN_LOG"); /* one line per report (libFuzzer's fork mode hides stderr) */
+    if (logp && *logp) {
+        FILE *lf = fopen(logp, "a");
+        if (lf) {
+            fprintf(lf, "%s %s\n", k_fz_known_names[kind], msg);
+            fclose(lf);
+        }
+    }
     if (g_fz_known_count[kind]++ < 3)
         fprintf(stderr, "FUZZ KNOWN %s (%s build): %s\n", k_fz_known_names[kind], LSM_REAL_IS_FLOAT ? "float" : "double",
                 msg);

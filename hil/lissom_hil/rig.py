@@ -56,6 +56,7 @@ BUILTIN_LIMITS = {"v": 250.0, "a": 3000.0, "j": 60000.0, "snap": 1.18e7}
 class RigConfig:
     kind: str = "vcan"                 # vcan | can0
     iface: Optional[str] = None        # default vcan0 / can0
+    node_iface: Optional[str] = None   # local node's interface when it differs (behind lissom_hil.bridge)
     node_id: int = 1
     local: Optional[bool] = None       # start lissom-node (default: True on vcan, False on can0)
     machine: Optional[str] = None      # machine file for the local node (limits for the checks)
@@ -158,7 +159,8 @@ class Rig:
                 args += ["--machine", self.cfg.machine]
             if "--axes" not in args and not self.cfg.machine:
                 args += ["--axes", str(self.cfg.axes)]
-            self.proc = node_proc.NodeProcess(node_proc.find_node_binary(), self.cfg.iface, self.cfg.node_id,
+            self.proc = node_proc.NodeProcess(node_proc.find_node_binary(), self.cfg.node_iface or self.cfg.iface,
+                                              self.cfg.node_id,
                                               trace=self.trace_path, extra=args, log_path=self.out("node.log"))
             self.proc.start()
         else:

@@ -22,7 +22,7 @@ import can
 import numpy as np
 import pytest
 
-from lissom_hil import gpio_sim
+from lissom_hil import bridge, gpio_sim
 from lissom_hil.frames import CAN_ERR_BUSOFF, CAN_ERR_RESTARTED
 from lissom_hil.gcode import read_gcode
 from lissom_hil.path_stream import PathStreamer
@@ -288,3 +288,56 @@ def test_fault_frame_flood_mid_path(rig):
     assert not other, "EMCY under the flood: %s" % other
     tr = _check_trace(rig, "flood")
     assert _executed_once(tr) == list(range(1, len(blocks) + 1)), "blocks lost or run twice"
+
+
+def _bridge_policy(direction, k, can_id):
+    """Faults on the path stream only (the SDO requests 0x600 + id and answers 0x580 + id), at fixed frame
+    counts so that a run is reproducible: in each direction two frames dropped, three sent twice, three held
+    back behind the next frame (reordered, e.g. behind a SYNC or a TPDO)."""
+    if not _bridge_policy.active or can_id & 0x780 not in (0x600, 0x580):
+        return bridge.PASS
+    n = _bridge_policy.sdo[direction]
+    _bridge_policy.sdo[direction] += 1
+    return {9: bridge.DROP, 41: bridge.DROP, 5: bridge.DUP, 23: bridge.DUP, 57: bridge.DUP,
+            14: bridge.HOLD, 33: bridge.HOLD, 49: bridge.HOLD}.get(n, bridge.PASS)
+
+
+def test_fault_lossy_bridge(rig):
+    """Frame loss, duplication and reordering on the path stream (a lossy bridge between the master on vcan0 and
+    the node on vcan1): the master's retries (path_stream.py) and the node's sequence numbers keep every block
+    exactly once; the path runs (starving and restarting while blocks are late) to its exact end within the
+    limits."""
+    rig.require_local(pytest, "the bridge needs the node on its own virtual interface")
+    if subprocess.run(["ip", "link", "show", "vcan1"], capture_output=True).returncode != 0:
+        pytest.skip("no vcan1 (hil/run_hil.sh creates it)")
+    _bridge_policy.sdo = {"m2n": 0, "n2m": 0}
+    _bridge_policy.active = False
+    br = bridge.LossyBridge(rig.cfg.iface, "vcan1", _bridge_policy).start()
+    old = rig.cfg.node_iface
+    try:
+        rig.cfg.node_iface = "vcan1"
+        _setup(rig, ["--no-gpio"])  # restarts the node behind the bridge
+        blocks = read_gcode(PROGRAM)
+        streamer = PathStreamer(rig.node, 1000, origin=rig.home)
+        streamer.stream(blocks[:2])  # two blocks in, the path started: the rest streams, faulted, while it runs
+        rig.write(0x5000, 1)
+        _bridge_policy.active = True
+        streamer.stream(blocks[2:], first_seq=3)
+        last = len(blocks)
+        rig.wait_until(lambda: streamer._read(0x5005) == last and streamer._read(0x5003) == streamer._read(0x5007)
+                       and streamer._read(0x6041) & 0x0400, 90.0, "path not finished behind the bridge", poll=0.05)
+        _bridge_policy.active = False
+        end = blocks[-1].end
+        assert [streamer._read(0x6062 + 0x800 * k) - rig.home[k] for k in range(2)] == [
+            round(end[0] * 1000), round(end[1] * 1000)]
+        print("bridge: %s; streamer retries %s" % (br.counts, streamer.retries))
+        assert br.counts[bridge.DROP] >= 2 and br.counts[bridge.DUP] >= 2 and br.counts[bridge.HOLD] >= 2, br.counts
+        assert sum(streamer.retries.values()) >= 1, "no fault reached the stream: %s" % streamer.retries
+        tr = _check_trace(rig, "bridge")
+        assert _executed_once(tr) == list(range(1, len(blocks) + 1)), "blocks lost or run twice"
+        assert rig.read(0x5004) == len(blocks)
+    finally:
+        _bridge_policy.active = False
+        rig.stop()
+        rig.cfg.node_iface = old
+        br.stop()

@@ -223,9 +223,14 @@ static void fz_run_out(fz_run *r, double est_s, const lsm_real end[FZ_AXES])
         const long limit = r->cycles + max_cycles * 20;
         while (r->state != LSM_INTERP_DONE && r->cycles < limit)
             fz_step(r);
-        if (r->state != LSM_INTERP_DONE)
+        if (r->state != LSM_INTERP_DONE && r->state != LSM_INTERP_RUN)
             fz_fatal("machine %s: not done after %ld cycles (%.3f s, bound %.3f s): a stall (state %d)", r->m->name,
                      r->cycles, r->cycles * r->m->cycle_s, bound_s, (int)r->state);
+        if (r->state == LSM_INTERP_RUN) { /* still moving after 21 x the bound: an extreme crawl (or a stall) */
+            fz_known(FZ_K_CRAWL, "machine %s: still running after %.3f s in motion, bound %.3f s", r->m->name,
+                     (r->cycles - r->idle_cycles) * r->m->cycle_s, bound_s);
+            return;
+        }
         fz_known(FZ_K_CRAWL, "machine %s: %.3f s in motion against a bound of %.3f s", r->m->name,
                  (r->cycles - r->idle_cycles) * r->m->cycle_s, bound_s);
     }

@@ -244,7 +244,9 @@ typedef struct lsm_planner {
     lsm_real tail_fit_err;      /* fitting error of the last block (its corners get the rest of the tolerance) */
     lsm_real tail_n[3];         /* the last block is a fitted arc with this plane normal (tail_arc) */
     uint8_t tail_arc;
-    uint8_t reserved2[3];
+    uint8_t fit_need;           /* a vertex of the pending run limits the feed (its arc fit is used) */
+    uint8_t fit_slots;          /* slots the pending run takes when it is emitted (reserved as it grows) */
+    uint8_t reserved2;
     lsm_planner_stats stats;
 } lsm_planner;
 

@@ -1,0 +1,366 @@
+/* plan_nodes.c: the backward pass: nodes at the valleys of the cap profile and their W (planner.h, "Look-ahead
+ * invariants"), with the continuous-ramp distance probes of the searches, and the feed override. */
+#include "planner_int.h"
+
+/* The distance probes (continuous ramps, cheap): bisected to a quarter of SPEED_RES, at most PROBE_ITER steps. */
+#define PROBE_ITER 40
+#define PROBE_RES_SHARE LSM_R(0.25)
+/* A lowered override: the stopping distance from the current speed is estimated with OVR_LIMIT_SHARE of the
+ * block's limits at rest (a conservative ramp), scaled by OVR_NEED_SCALE, plus OVR_NEED_CYCLES cycles of travel;
+ * the switch moves further out (doubling) at most OVR_TRIES times, then to the blocks appended later. */
+#define OVR_LIMIT_SHARE LSM_R(0.5)
+#define OVR_UNBOUNDED_A LSM_R(1e12)
+#define OVR_UNBOUNDED_J LSM_R(1e15)
+#define OVR_UNBOUNDED_S LSM_R(1e18)
+#define OVR_NEED_SCALE LSM_R(2.0)
+#define OVR_NEED_CYCLES LSM_R(4.0)
+#define OVR_TRIES 8
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* distance probes (continuous ramps)                                                                           */
+
+/* Time of one continuous sin² velocity change by dv with the tangential limits a, j, s (Kombarov eqs 25-31, before
+ * quantisation: the whole-cycle profile of the strict rule takes a few cycles more). */
+static lsm_real ramp_time_cont(lsm_real dv, lsm_real a, lsm_real j, lsm_real s)
+{
+    if (!(dv > R0))
+        return R0;
+    lsm_real t1 = PI_R * j / (LSM_R(2.0) * s);                          /* eq 25 */
+    t1 = lsm_min2(t1, lsm_sqrt(PI_R * a / (LSM_R(2.0) * s)));          /* eq 26 */
+    t1 = lsm_min2(t1, lsm_cbrt(PI_R * dv / (LSM_R(4.0) * s)));         /* eq 29 */
+    const lsm_real jc = LSM_R(2.0) * t1 * s / PI_R;                    /* eq 32 */
+    const lsm_real t2 = lsm_max2(lsm_min2(a / jc - t1, lsm_sqrt(t1 * t1 / LSM_R(4.0) + dv / jc) - LSM_R(1.5) * t1), R0);
+    const lsm_real ap = jc * (t1 + t2);                                /* eq 23 */
+    const lsm_real t4 = lsm_max2(dv / ap - LSM_R(2.0) * t1 - t2, R0);  /* eq 31 */
+    return LSM_R(4.0) * t1 + LSM_R(2.0) * t2 + t4;
+}
+
+/* Highest speed v in [w, vmax] from which one continuous ramp to w (or from w up to v) fits in distance D:
+ * (v + w) t(v - w) / 2 <= D, the travel being monotone in v. A first probe for the searches below. */
+lsm_real lsm_pl_speed_for_dist(lsm_real w, lsm_real D, lsm_real a, lsm_real j, lsm_real s, lsm_real vmax)
+{
+    if (!(vmax > w) || !(D > R0))
+        return w;
+    if ((vmax + w) * ramp_time_cont(vmax - w, a, j, s) <= LSM_R(2.0) * D)
+        return vmax;
+    lsm_real lo = w, hi = vmax;
+    for (int it = 0; it < PROBE_ITER && hi - lo > SPEED_RES * PROBE_RES_SHARE * hi; it++) {
+        const lsm_real mid = (lo + hi) / LSM_R(2.0);
+        if ((mid + w) * ramp_time_cont(mid - w, a, j, s) <= LSM_R(2.0) * D)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Highest cruise vc in [max(v0, v1), vmax] for which two continuous ramps v0 -> vc -> v1 fit in distance D. */
+lsm_real lsm_pl_cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a, lsm_real j, lsm_real s,
+                                lsm_real vmax)
+{
+    lsm_real lo = lsm_max2(v0, v1), hi = vmax;
+    if (!(hi > lo) || !(D > R0))
+        return lo;
+    for (int it = 0; it < PROBE_ITER && hi - lo > SPEED_RES * PROBE_RES_SHARE * hi; it++) {
+        const lsm_real mid = it == 0 ? hi : (lo + hi) / LSM_R(2.0);
+        const lsm_real d = (v0 + mid) * ramp_time_cont(mid - v0, a, j, s) + (mid + v1) * ramp_time_cont(mid - v1, a, j, s);
+        if (d <= LSM_R(2.0) * D) {
+            if (it == 0)
+                return hi;
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* nodes and their W                                                                                            */
+
+/* The test of a node's W for speed v over the piece pc (from the node to the next one, whose W is w1; exactly if
+ * exact): one verified ramp from v reaches w1 by its end (*r, starting at *xs), or a cruise at v goes through. */
+bool lsm_pl_w_test(pctx *pc, lsm_real v, lsm_real w1, bool exact, ramp *r, lsm_real *xs)
+{
+    return v <= w1 ? lsm_pl_region_ok(pc, R0, pc->D, v) : lsm_pl_fit_decel(pc, R0, pc->D, v, w1, exact, true, r, xs);
+}
+
+/* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact): a bisection
+ * between the speed that can cruise through the piece (or 0 before an exact stop) and c0. Feasibility is not
+ * strictly monotone in the speed near the caps (whole-cycle ramps against budgets that vanish at the cap), so a W
+ * may move either way when w1 changes: the interpolator's commitment is checked after every append
+ * (commitment_kept). */
+static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w1, bool exact)
+{
+    pl->stats.bp_nodes++;
+    pctx pc;
+    lsm_pl_pctx_init(&pc, pl, id, R0, id_end);
+    const lsm_real c0 = cap_of(pl, id);
+    const lsm_real D = pc.D;
+    const lsm_real mincap = lsm_pl_range_cap(&pc, R0, D);
+    lsm_real lo = lsm_min2(mincap, w1); /* cruising at lo through the piece always works */
+    if (exact)
+        lo = R0;
+    lsm_real hi = c0;
+    if (!(hi > lo))
+        return hi;
+    ramp r;
+    lsm_real xs;
+    if (lsm_pl_w_test(&pc, hi, w1, exact, &r, &xs))
+        return hi;
+    /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
+     * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
+    lsm_real ga, gj, gs;
+    lsm_pl_guess_limits(&pc, D, &ga, &gj, &gs);
+    lsm_real probe = lsm_pl_speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
+    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+        const lsm_real mid = probe_mid(lo, hi, &probe);
+        if (lsm_pl_w_test(&pc, mid, w1, exact, &r, &xs))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The test of node_w for speed v at node id: one verified ramp from v reaches w1 by the next node id_end (exactly
+ * if exact), or a cruise at v goes through. */
+static bool cert_ok(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real v, lsm_real w1, bool exact)
+{
+    pctx pc;
+    lsm_pl_pctx_init(&pc, pl, id, R0, id_end);
+    if (!(pc.D > LEN_EPS * (R1 + pc.D)))
+        return v <= w1;
+    ramp r;
+    lsm_real xs;
+    return lsm_pl_w_test(&pc, v, w1, exact, &r, &xs);
+}
+
+/* Can a piece that arrives at node `id` (a = 0) at speed v go on? The test of node_w: one verified ramp from v
+ * reaches the next node's W (or a cruise at v goes through). A piece that arrives below the node's W needs this:
+ * W itself was verified, but whole-cycle ramps make the lower speeds not always so. */
+bool lsm_pl_arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v)
+{
+    if (!(v > R0) || id == pl->tail || !id_lt(id, pl->tail) || (blk(pl, id)->flags & LSM_PB_STOP))
+        return true;
+    lsm_real w2;
+    const uint32_t n2 = lsm_pl_node_after(pl, id, &w2);
+    return cert_ok(pl, id, n2, v, w2, !(w2 > R0));
+}
+
+/* Valley detection while walking backwards (see planner.h: nodes at valleys and significant drops). */
+typedef struct vstate {
+    lsm_real M;       /* highest cap since the last node (walking back) */
+    lsm_real m;       /* lowest cap after the peak */
+    uint32_t m_id;
+    uint8_t desc;
+    uint8_t has_last;
+    lsm_real last_c;
+    uint32_t last_id;
+} vstate;
+
+static void vreset(vstate *s)
+{
+    s->M = -R1;
+    s->m = LSM_REAL_MAX;
+    s->m_id = 0;
+    s->desc = 0;
+    s->has_last = 0;
+    s->last_c = R0;
+    s->last_id = 0;
+}
+
+/* Feeds block id (cap c); returns 1 and *node when a node is found (at an id after `id`). */
+static int vstep(vstate *s, uint32_t id, lsm_real c, lsm_real h, lsm_real drop, uint32_t *node)
+{
+    if (s->has_last && s->last_c < c * (R1 - drop)) {
+        *node = s->last_id;
+        return 1;
+    }
+    if (!s->desc) {
+        if (c >= s->M)
+            s->M = c;
+        else if (c * (R1 + h) < s->M) {
+            s->desc = 1;
+            s->m = c;
+            s->m_id = id;
+        }
+    } else {
+        if (c <= s->m) {
+            s->m = c;
+            s->m_id = id;
+        } else if (c > s->m * (R1 + h)) {
+            *node = s->m_id;
+            return 1;
+        }
+    }
+    s->has_last = 1;
+    s->last_c = c;
+    s->last_id = id;
+    return 0;
+}
+
+/*
+ * Cap seen by the node detection: for a block shorter than 2 ERODE_CYCLES cycles of travel, the lowest cap from
+ * its start to that distance ahead, the travel measured at the speed of the dips ahead (two passes). This removes
+ * humps too short to change speed in (e.g. the lines between the corners of a dense polyline), so that valleys are
+ * those of the envelope, and keeps the detection local (a node depends only on the caps after it, never on the
+ * interpolator's position or on other nodes).
+ */
+#define ERODE_CYCLES 4
+static lsm_real min_cap_ahead(const lsm_planner *pl, uint32_t id, lsm_real d)
+{
+    lsm_real m = cap_of(pl, id), x = blk(pl, id)->g.len;
+    /* (not across an exact stop: what comes after one never moves the nodes before it, so that a junction made an
+     * exact stop restores the plan before it exactly) */
+    for (uint32_t q = id + 1u; q != pl->tail && x < d && !(blk(pl, q)->flags & LSM_PB_STOP); q++) {
+        m = lsm_min2(m, cap_of(pl, q));
+        x += blk(pl, q)->g.len;
+    }
+    return m;
+}
+
+static lsm_real eroded_cap(const lsm_planner *pl, uint32_t id)
+{
+    const lsm_real c = cap_of(pl, id);
+    const lsm_real k = LSM_R(2.0) * (lsm_real)ERODE_CYCLES * pl->cfg.cycle_s;
+    const lsm_real len = blk(pl, id)->g.len;
+    if (len >= k * c)
+        return c; /* a plateau of its own */
+    /* the window is measured at the speed the dips ahead allow: a hump matters if there is room to speed up from
+     * them, not from its own cap */
+    const lsm_real m1 = min_cap_ahead(pl, id, k * c);
+    if (len >= k * m1)
+        return c;
+    return min_cap_ahead(pl, id, k * m1);
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* backward pass                                                                                                */
+
+void lsm_pl_backward_pass(lsm_planner *pl)
+{
+    if (pl->tail == pl->head)
+        return;
+    const lsm_real h = pl->cfg.node_hyst, drop = pl->cfg.node_drop;
+    uint32_t n_id = pl->tail; /* the end of the buffer: a stop */
+    lsm_real n_w = R0;
+    bool n_exact = true;
+    vstate vs;
+    vreset(&vs);
+    const uint32_t lo = pl->head;
+    uint32_t k = pl->tail;
+    while (k != lo) {
+        k--;
+        lsm_pblock *b = blk(pl, k);
+        uint32_t node = 0;
+        int found = 0;
+        if (b->flags & LSM_PB_STOP) {
+            /* pending valley between here and the next node first */
+            if (vs.desc && id_lt(k, vs.m_id)) {
+                node = vs.m_id;
+                found = 1;
+            } else {
+                node = k;
+                found = 2;
+            }
+        } else {
+            found = vstep(&vs, k, eroded_cap(pl, k), h, drop, &node);
+        }
+        if (!found)
+            continue; /* (its node flag is settled when the node before it is found: a block may turn out to be the
+                         valley once the walk has gone past it, and its old flag tells whether its W changed) */
+        /* a node at `node` (node >= k) */
+        lsm_pblock *nb = blk(pl, node);
+        lsm_real w = (nb->flags & LSM_PB_STOP) ? R0 : node_w(pl, node, n_id, n_w, n_exact);
+        /* unchanged, or higher by less than the searches resolve and the old W still certified against the node
+         * after it (feasibility is not strictly monotone in the speed, so a lower W is not certified by a higher
+         * one): the old W stays, and so does everything before it */
+        const bool was = (nb->flags & LSM_PB_NODE) != 0 && !pl->full_pass;
+        const bool same = was && (nb->w_mm_s == w || (w > nb->w_mm_s && w <= nb->w_mm_s * (R1 + SPEED_RES) &&
+                                                      cert_ok(pl, node, n_id, nb->w_mm_s, n_w, n_exact)));
+        if (same)
+            w = nb->w_mm_s;
+        nb->flags |= LSM_PB_NODE;
+        nb->w_mm_s = w;
+        for (uint32_t q = node + 1u; q != n_id; q++) /* blocks inside the piece are not nodes */
+            blk(pl, q)->flags &= (uint8_t)~LSM_PB_NODE;
+        n_id = node;
+        n_w = w;
+        n_exact = (nb->flags & LSM_PB_STOP) != 0;
+        if (same) {
+            pl->bp_stop = node;
+            return; /* everything before is unchanged */
+        }
+        /* restart the detection just before the node and walk again down to k */
+        vreset(&vs);
+        k = node;
+    }
+    /* a valley still pending at the interpolator stays inside the first piece (verified pointwise there) */
+    for (uint32_t q = pl->head; q != n_id; q++)
+        blk(pl, q)->flags &= (uint8_t)~LSM_PB_NODE;
+    pl->full_pass = 0;
+    pl->bp_stop = pl->head;
+}
+
+void lsm_planner_update(lsm_planner *pl)
+{
+    if (pl)
+        lsm_pl_backward_pass(pl);
+}
+
+lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
+{
+    if (pl == NULL)
+        return LSM_E_NULL;
+    if (f != f)
+        return LSM_E_NAN;
+    if (!(f >= R0 && f <= LSM_R(2.0)))
+        return LSM_E_PL_OVERRIDE;
+    if (id_lt(cur, pl->head) || !id_lt(cur, pl->tail))
+        cur = pl->head;
+    const lsm_real hi = lsm_max2(pl->ovr_near, pl->ovr_far);
+    if (f >= hi || pl->tail == pl->head) {
+        pl->ovr_near = pl->ovr_far = f;
+        pl->ovr_switch = cur;
+    } else {
+        /* blocks within twice the stopping-scale distance keep the larger factor; the new one applies beyond */
+        pl->ovr_near = hi;
+        pl->ovr_far = f;
+        coef c;
+        coef_get(blk(pl, cur), &c);
+        ramp r;
+        lsm_real need = R0;
+        const lsm_real a = c.aa > R0 ? OVR_LIMIT_SHARE / c.aa : OVR_UNBOUNDED_A;
+        const lsm_real j = c.aj > R0 ? OVR_LIMIT_SHARE / c.aj : OVR_UNBOUNDED_J;
+        const lsm_real s = c.as > R0 ? OVR_LIMIT_SHARE / c.as : OVR_UNBOUNDED_S;
+        if (v_now > R0 && lsm_pl_ramp_plan(&r, pl->cfg.cycle_s, v_now, R0, a, j, s))
+            need = OVR_NEED_SCALE * r.dist + OVR_NEED_CYCLES * v_now * pl->cfg.cycle_s;
+        /* the switch must leave a verified piece from the interpolator's commitment point (catching up with
+         * the lower caps): further out until it does; at worst only blocks appended later get the new factor */
+        for (int tries = 0;; tries++) {
+            uint32_t id = cur;
+            lsm_real d = R0;
+            while (id != pl->tail && d <= need) {
+                d += blk(pl, id)->g.len;
+                id++;
+            }
+            if (tries >= OVR_TRIES)
+                id = pl->tail;
+            pl->ovr_switch = id;
+            pl->full_pass = 1;
+            pl->gen++;
+            lsm_pl_backward_pass(pl);
+            if (id == pl->tail || lsm_pl_horizon_feasible(pl, false))
+                break;
+            need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
+        }
+        if (!lsm_pl_commitment_kept(pl))
+            pl->piece_stale = 1; /* (the loop verified a piece from the horizon) */
+        return LSM_OK;
+    }
+    pl->full_pass = 1;
+    pl->gen++;
+    lsm_pl_backward_pass(pl);
+    return LSM_OK;
+}

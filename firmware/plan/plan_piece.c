@@ -1,0 +1,571 @@
+/* plan_piece.c: the forward step: the piece from the interpolator's point to the next node at the best feed
+ * (planner.h, "Look-ahead invariants"), staircases, feed hold, and the check of the commitment horizon. */
+#include <string.h>
+
+#include "planner_int.h"
+
+/* Staircases (staircase()): only for a rise above STAIR_MIN_RISE times v0 (plus STAIR_MIN_RISE_ABS mm/s from rest);
+ * not when ramp A already starts at once with STAIR_UNSLOWED of its block's limits at rest (nothing slowed it);
+ * levels at STAIR_LEVEL_RATIO of the rise, then of that, down to a step of STAIR_MIN_STEP of v0; taken only when it
+ * gains more than STAIR_MIN_GAIN_CYCLES cycles (less is within the quantisation of the ramps). */
+#define STAIR_MIN_RISE LSM_R(1.2)
+#define STAIR_MIN_RISE_ABS LSM_R(1e-6)
+#define STAIR_UNSLOWED LSM_R(0.9)
+#define STAIR_LEVEL_RATIO LSM_R(0.6)
+#define STAIR_MIN_STEP LSM_R(0.02)
+#define STAIR_MIN_GAIN_CYCLES LSM_R(2.0)
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* pieces                                                                                                       */
+
+typedef struct plan5 {
+    bool step;        /* ramp A is one step of a staircase (the interpolator re-plans at its end) */
+    lsm_real v0, vc, v1;
+    ramp A, B;
+    lsm_real xA, xB;  /* ramp starts (piece-relative); lead cruise [0, xA], cruise [xA + A.dist, xB],
+                         trail cruise [xB + B.dist, D] */
+} plan5;
+
+static void no_ramp(ramp *r, lsm_real dt, lsm_real v)
+{
+    lsm_pl_ramp_plan(r, dt, v, v, R1, R1, R1);
+}
+
+/* Ramp A from v0 to vc, placed as early as it verifies. */
+static bool place_A(pctx *pc, lsm_real v0, lsm_real vc, plan5 *p, bool catchup)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s, D = pc->D;
+    p->xA = R0;
+    if (vc == v0) {
+        no_ramp(&p->A, dt, v0);
+        return true;
+    }
+    if (vc < v0) {
+        if (!catchup)
+            return false;
+        return lsm_pl_fit_decel_now(pc, R0, D, v0, vc, &p->A);
+    }
+    return lsm_pl_fit_accel(pc, R0, D, v0, vc, false, &p->A, &p->xA);
+}
+
+/* The whole piece for cruise feed vc: ramp A as early as it verifies, ramp B as late, the cruise between. */
+static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s, D = pc->D;
+    p->v0 = v0;
+    p->vc = vc;
+    p->v1 = v1;
+    if (!(vc > R0))
+        return false;
+    if (!place_A(pc, v0, vc, p, catchup))
+        return false;
+    const lsm_real xa_end = p->xA + p->A.dist;
+    if (vc > v1) {
+        if (!lsm_pl_fit_decel(pc, xa_end, D, vc, v1, exact, false, &p->B, &p->xB))
+            return false;
+    } else {
+        no_ramp(&p->B, dt, vc);
+        p->xB = D;
+    }
+    if (p->xB < xa_end - LEN_EPS * (R1 + D))
+        return false;
+    if (p->xB < xa_end)
+        p->xB = xa_end;
+    return lsm_pl_region_ok(pc, xa_end, p->xB, vc);
+}
+
+static void put_ramp(lsm_piece *pc, int at, const ramp *r, lsm_real dt)
+{
+    lsm_phase ph[7];
+    lsm_scurve_phases(&r->iv, r->jp, ph);
+    for (int i = 0; i < 7; i++) {
+        lsm_piece_phase *q = &pc->ph[at + i];
+        q->n_cycles = ph[i].n_cycles;
+        q->T_s = (lsm_real)ph[i].n_cycles * dt;
+        q->shape = ph[i].shape;
+        q->jerk_mm_s3 = ph[i].jerk_mm_s3;
+    }
+}
+
+static void put_cruise(lsm_piece *pc, int at, lsm_real len, lsm_real v)
+{
+    lsm_piece_phase *q = &pc->ph[at];
+    q->n_cycles = 0;
+    q->shape = LSM_PHASE_CONST;
+    q->jerk_mm_s3 = R0;
+    q->len_mm = len > R0 && v > R0 ? len : R0;
+    q->T_s = q->len_mm > R0 ? q->len_mm / v : R0;
+}
+
+static void fill_piece(const lsm_planner *pl, const pctx *ctx, const plan5 *p, lsm_real end_x, lsm_piece *out)
+{
+    const lsm_real dt = pl->cfg.cycle_s;
+    memset(out, 0, sizeof *out);
+    out->blk = ctx->id0;
+    out->off_mm = ctx->off0;
+    out->v0_mm_s = p->v0;
+    out->v1_mm_s = p->v1;
+    out->vc_mm_s = p->vc;
+    out->end_blk = ctx->id_end;
+    out->stop = p->v1 > R0 ? 0u : 1u;
+    out->step = p->step ? 1u : 0u;
+    const lsm_real xa_end = p->xA + p->A.dist, xb_end = p->xB + p->B.dist;
+    put_cruise(out, 0, p->xA, p->v0);
+    put_ramp(out, 1, &p->A, dt);
+    put_cruise(out, 8, p->xB - xa_end, p->vc);
+    put_ramp(out, 9, &p->B, dt);
+    put_cruise(out, 16, end_x - xb_end, p->v1);
+    /* phase start states and the travel of every ramp phase (exact boundary values, no trigonometry) */
+    lsm_kin k = {R0, p->v0, R0, R0};
+    lsm_real T = R0;
+    for (int i = 0; i < LSM_PIECE_PHASES; i++) {
+        lsm_piece_phase *q = &out->ph[i];
+        out->st[i] = k;
+        out->st[i].j_mm_s3 = R0;
+        if (i == 0 || i == 8 || i == 16) { /* cruises run at exactly their feed */
+            const lsm_real v = i == 0 ? p->v0 : i == 8 ? p->vc : p->v1;
+            if (i > 0) /* up to where the next ramp (or the end) is planned: the phases add up to the piece */
+                put_cruise(out, i, (i == 8 ? p->xB : end_x) - k.s_mm, v);
+            out->st[i].v_mm_s = v;
+            out->st[i].a_mm_s2 = R0;
+            k.v_mm_s = v;
+            k.a_mm_s2 = R0;
+            k.s_mm += q->len_mm;
+        } else if (q->n_cycles) {
+            const lsm_phase ph = {q->n_cycles, q->shape, q->jerk_mm_s3};
+            lsm_kin e;
+            lsm_phase_end(&ph, dt, &out->st[i], &e);
+            q->len_mm = e.s_mm - out->st[i].s_mm;
+            k = e;
+        }
+        T += q->T_s;
+    }
+    /* the ramps' ends carry rounding: the cruises start exactly where they are planned */
+    out->len_mm = end_x;
+    out->T_s = T;
+}
+
+/* The node after block `after` (exclusive) and its W; tail: the end of the buffer (W = 0). */
+uint32_t lsm_pl_node_after(const lsm_planner *pl, uint32_t after, lsm_real *w)
+{
+    for (uint32_t id = after + 1u;; id++) {
+        if (id == pl->tail) {
+            *w = R0;
+            return id;
+        }
+        const lsm_pblock *b = blk(pl, id);
+        if (b->flags & LSM_PB_STOP) {
+            *w = R0;
+            return id;
+        }
+        if (b->flags & LSM_PB_NODE) {
+            *w = b->w_mm_s;
+            return id;
+        }
+    }
+}
+
+/* Fallback when no verified piece was found (should not happen; counted): stop as soon as possible with a verified
+ * ramp, anywhere ahead; the next piece starts from rest. */
+static lsm_status fallback(lsm_planner *pl, pctx *pc, lsm_real v0, lsm_piece *out)
+{
+    pl->stats.plan_fallbacks++;
+    plan5 p;
+    memset(&p, 0, sizeof p);
+    const lsm_real dt = pl->cfg.cycle_s;
+    p.v0 = p.vc = v0;
+    p.v1 = R0;
+    no_ramp(&p.A, dt, v0);
+    no_ramp(&p.B, dt, v0);
+    if (v0 > R0) {
+        pctx all;
+        lsm_pl_pctx_init(&all, pl, pc->id0, pc->off0, pl->tail);
+        all.floor = v0;
+        if (lsm_pl_fit_decel_now(&all, R0, all.D, v0, R0, &p.B)) {
+            fill_piece(pl, &all, &p, p.B.dist, out);
+            out->hold = 1; /* ends anywhere */
+            return LSM_E_INTERNAL;
+        }
+    }
+    fill_piece(pl, pc, &p, R0, out);
+    out->stop = 1;
+    out->hold = 1;
+    out->T_s = R0;
+    return LSM_E_INTERNAL;
+}
+
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp);
+
+/* Time from the piece start to x (>= the end of ramp A, <= the start of ramp B) along p. */
+static lsm_real time_to(const plan5 *p, lsm_real dt, lsm_real x)
+{
+    const lsm_real xa_end = p->xA + p->A.dist;
+    lsm_real t = (lsm_real)lsm_scurve_total_cycles(&p->A.iv) * dt;
+    if (p->xA > R0 && p->v0 > R0)
+        t += p->xA / p->v0;
+    if (x > xa_end && p->vc > R0)
+        t += (x - xa_end) / p->vc;
+    return t;
+}
+
+/*
+ * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
+ * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
+ * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
+ * (a = 0 there, lsm_piece.step), a second one up to the same cruise. For a few lower cruises (geometric levels
+ * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
+ * (or the end of the first plan's ramp) sooner than the single ramp.
+ */
+static void staircase(pctx *pc, plan5 *best)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    const lsm_real v0 = best->v0, vmax = best->vc;
+    if (!(vmax > v0 * STAIR_MIN_RISE + STAIR_MIN_RISE_ABS) || best->xB < best->xA + best->A.dist)
+        return;
+    /* a ramp A that starts at once with (nearly) the limits of its first block at rest was not slowed: no lower
+     * step can reach the cruise sooner */
+    lsm_real na, nj, ns;
+    lsm_pl_guess_limits(pc, R0, &na, &nj, &ns);
+    if (!(best->xA > R0) && best->A.a_lim >= STAIR_UNSLOWED * na && best->A.j_lim >= STAIR_UNSLOWED * nj)
+        return;
+    const bool exact = !(best->v1 > R0);
+    const lsm_real xe = best->xA + best->A.dist;
+    lsm_real gain = R0;
+    plan5 p, q, found;
+    memset(&found, 0, sizeof found);
+    bool have = false;
+    const lsm_real k = STAIR_LEVEL_RATIO;
+    lsm_real dv = (vmax - v0) * k;
+    for (int it = 0; it < STAIR_LEVELS; it++, dv *= k) {
+        const lsm_real vc = v0 + dv;
+        if (!(vc > v0 * (R1 + STAIR_MIN_STEP)))
+            break;
+        if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
+            continue;
+        const lsm_real x1 = p.xA + p.A.dist;
+        if (!(x1 < best->xB))
+            continue;
+        /* the second ramp, from the end of the first one */
+        lsm_pl_seek(pc, x1);
+        pctx sub;
+        lsm_pl_pctx_init(&sub, pc->pl, pc->cid, x1 - pc->cx, pc->id_end);
+        if (!(sub.D > LEN_EPS * (R1 + sub.D)) ||
+            !feas5(&sub, vc, vmax, lsm_min2(best->v1, vmax), exact, false, &q))
+            continue;
+        const lsm_real x2 = x1 + q.xA + q.A.dist;
+        const lsm_real X = lsm_max2(x2, xe);
+        if (!(X <= best->xB) || !(X - x1 <= q.xB))
+            continue;
+        const lsm_real g = time_to(best, dt, X) - (time_to(&p, dt, x1) + time_to(&q, dt, X - x1));
+        if (g > gain + STAIR_MIN_GAIN_CYCLES * dt) {
+            gain = g;
+            found = p;
+            have = true;
+        }
+    }
+    if (have) {
+        found.step = true;
+        *best = found;
+    }
+}
+
+lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, lsm_piece_mode mode,
+                                  lsm_piece *out)
+{
+    if (pl == NULL || out == NULL)
+        return LSM_E_NULL;
+    if (id_lt(id0, pl->head) || !id_lt(id0, pl->tail))
+        return LSM_E_EMPTY;
+    const lsm_real dt = pl->cfg.cycle_s;
+    plan5 p;
+    memset(&p, 0, sizeof p);
+    if (mode == LSM_PIECE_HOLD) {
+        /* within the path up to the next exact stop (a corner the machine cannot pass at speed) */
+        uint32_t id_end = id0 + 1u;
+        while (id_end != pl->tail && !(blk(pl, id_end)->flags & LSM_PB_STOP))
+            id_end++;
+        pctx pc;
+        lsm_pl_pctx_init(&pc, pl, id0, off0, id_end);
+        p.v0 = p.vc = v0;
+        p.v1 = R0;
+        no_ramp(&p.A, dt, v0);
+        no_ramp(&p.B, dt, v0);
+        if (v0 > R0 && !lsm_pl_fit_decel_now(&pc, R0, pc.D, v0, R0, &p.B))
+            return LSM_E_INFEASIBLE;
+        fill_piece(pl, &pc, &p, p.B.dist, out);
+        out->hold = 1;
+        pl->stats.pieces++;
+        return LSM_OK;
+    }
+    if (off0 >= blk(pl, id0)->g.len && id0 + 1u == pl->tail)
+        return LSM_E_EMPTY;
+    pctx pc;
+    plan5 best;
+    if (!plan_normal(pl, id0, off0, v0, &pc, &best))
+        return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+    fill_piece(pl, &pc, &best, pc.D, out);
+    pl->stats.pieces++;
+    return LSM_OK;
+}
+
+/* Forward search of plan_normal: the tuning numbers. */
+/* Nodes tried from the interpolator's point: a node that appeared ahead since the speed was committed cannot trap
+ * it (each further one puts the dip of the one before inside the piece, verified pointwise); a few suffice. */
+#define NODE_CANDIDATES 5
+/* A piece shorter than this many cycles of travel would start and end inside one control cycle, too soon for the
+ * next one to be planned in the background: pass 0 plans across such a valley node. */
+#define SHORT_PIECE_CYCLES LSM_R(1.5)
+/* Override catch-up: cruise targets tried from the cap here down towards v1, each this share of the way closer. */
+#define CATCHUP_TRIES 24
+#define CATCHUP_SHRINK LSM_R(0.7)
+/* Extra bisection steps when a lower cruise below dips is searched (the bracket starts at 0, not at v1). */
+#define DIP_EXTRA_BISECT 8
+/* Extra bisection steps for the highest cruise while no plan has been found yet (a plan is needed, not a better
+ * one: a finer search before giving up to the fallback). */
+#define CRUISE_EXTRA_BISECT 20
+
+/* The state of one forward search (plan_normal) over its candidate nodes. */
+typedef struct search {
+    lsm_planner *pl;
+    uint32_t id0;        /* the start: block, offset, speed (a = 0) */
+    lsm_real off0, v0;
+    pctx pc;             /* the piece to the candidate node (the last one tried) */
+    lsm_real w1;         /* W of the candidate node */
+    lsm_real v1;         /* arrival speed at it */
+    bool exact;          /* the node is a stop */
+    bool catchup;        /* v0 is above the caps right here (override lowered) */
+    bool have;           /* best holds a verified plan */
+    lsm_real ga, gj, gs; /* budgets at the start (at rest): the distance probes */
+    plan5 best, p;       /* the best plan so far, and the one being tried */
+} search;
+
+/* Forward step: the highest v1 <= w1 that one ramp from v0 reaches (then cruise). */
+static void reach_speed(search *s)
+{
+    pctx *pc = &s->pc;
+    if (!(s->v1 > s->v0) || s->catchup || feas5(pc, s->v0, s->v1, s->v1, false, false, &s->p))
+        return;
+    lsm_real lo = s->v0, hi = s->v1;
+    lsm_real probe = lsm_pl_speed_for_dist(s->v0, pc->D, s->ga, s->gj, s->gs, s->v1);
+    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+        const lsm_real mid = probe_mid(lo, hi, &probe);
+        if (feas5(pc, s->v0, mid, mid, false, false, &s->p))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    s->v1 = lo;
+}
+
+/* Arriving below the node's W: at a speed from which the machine can go on (verified like W). */
+static void arrival_speed(search *s, uint32_t id_end)
+{
+    if (s->catchup || !(s->v1 > R0) || !(s->v1 < s->w1) || lsm_pl_arrival_ok(s->pl, id_end, s->v1))
+        return;
+    lsm_real lo = R0, hi = s->v1;
+    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
+        const lsm_real mid = (lo + hi) / LSM_R(2.0);
+        if (lsm_pl_arrival_ok(s->pl, id_end, mid))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    s->v1 = lo;
+}
+
+/* Override catch-up: slow down at once towards the cap here, then cruise and go on. */
+static void plan_catchup(search *s)
+{
+    pctx *pc = &s->pc;
+    const lsm_real v1 = s->v1;
+    lsm_real vt = lsm_max2(v1, lsm_min2(s->v0, lsm_pl_range_cap(pc, R0, pc->D)));
+    for (int it = 0; it < CATCHUP_TRIES && !s->have; it++) {
+        if (feas5(pc, s->v0, vt, v1, s->exact, true, &s->p)) {
+            s->best = s->p;
+            s->have = true;
+        }
+        vt = v1 + (vt - v1) * CATCHUP_SHRINK;
+    }
+}
+
+/* The monotone profile (cruise at lo = max(v0, v1)); if it does not verify, caps below v0 inside the piece (dips
+ * that are not nodes): slow down at once to a cruise below them, arriving at the node below its W when the dip is
+ * lower than that (W is only the highest speed). */
+static void plan_below_dips(search *s, uint32_t id_end, lsm_real lo)
+{
+    pctx *pc = &s->pc;
+    const lsm_real v1 = s->v1;
+    if (lo > R0 && feas5(pc, s->v0, lo, v1, s->exact, false, &s->p)) {
+        s->best = s->p;
+        s->have = true;
+        return;
+    }
+    if (!(s->v0 > v1 || lo > R0))
+        return;
+    lsm_real l = R0, u = lo;
+    for (int it = 0; it < VC_BISECT + DIP_EXTRA_BISECT && u - l > SPEED_RES * u; it++) {
+        const lsm_real mid = (l + u) / LSM_R(2.0);
+        if (mid > R0 && feas5(pc, s->v0, mid, lsm_min2(v1, mid), s->exact, true, &s->p) &&
+            (mid >= v1 || lsm_pl_arrival_ok(s->pl, id_end, mid))) {
+            s->best = s->p;
+            s->have = true;
+            l = mid;
+        } else {
+            u = mid;
+        }
+    }
+}
+
+/* The piece the node's certificate verified (node_w, arrival_ok): one ramp from v0 down to the next node's W, or a
+ * cruise at v0, so that a speed certified at a node always goes on. */
+static void plan_certified(search *s)
+{
+    if (s->have || s->off0 != R0 || !(s->v0 > R0))
+        return;
+    const lsm_real dt = s->pl->cfg.cycle_s, v0 = s->v0, v1 = s->v1;
+    plan5 *p = &s->p;
+    ramp r;
+    lsm_real xs;
+    memset(p, 0, sizeof *p);
+    p->v0 = p->vc = v0;
+    no_ramp(&p->A, dt, v0);
+    if (lsm_pl_w_test(&s->pc, v0, v1, s->exact, &r, &xs)) {
+        p->v1 = v0 > v1 ? v1 : v0;
+        if (v0 > v1) {
+            p->B = r;
+            p->xB = xs;
+        } else {
+            no_ramp(&p->B, dt, v0);
+            p->xB = s->pc.D;
+        }
+        s->best = *p;
+        s->have = true;
+    }
+}
+
+/* The highest cruise feed: bisection between the monotone profile lo and the highest cap of the piece. */
+static void plan_cruise(search *s, lsm_real lo)
+{
+    pctx *pc = &s->pc;
+    const lsm_real v0 = s->v0, v1 = s->v1;
+    lsm_real mx = R0;
+    for (uint32_t id = pc->id0; id != pc->id_end; id++)
+        mx = lsm_max2(mx, cap_of(s->pl, id));
+    const lsm_real hi = lsm_max2(lo, mx);
+    if (!(hi > lo) || !(s->have || !(v0 > v1)))
+        return;
+    if (feas5(pc, v0, hi, v1, s->exact, false, &s->p)) {
+        s->best = s->p;
+        s->have = true;
+        return;
+    }
+    lsm_real l = lo, u = hi;
+    lsm_real probe = lsm_pl_cruise_for_dist(v0, v1, pc->D, s->ga, s->gj, s->gs, hi);
+    for (int it = 0; it < VC_BISECT + (s->have ? 0 : CRUISE_EXTRA_BISECT) && u - l > SPEED_RES * u; it++) {
+        const lsm_real mid = probe_mid(l, u, &probe);
+        if (feas5(pc, v0, mid, v1, s->exact, false, &s->p)) {
+            s->best = s->p;
+            s->have = true;
+            l = mid;
+        } else {
+            u = mid;
+        }
+    }
+}
+
+/* The stages of the search for the piece to the candidate node id_end (s->pc and s->w1 set). */
+static void plan_to_node(search *s, uint32_t id_end)
+{
+    pctx *pc = &s->pc;
+    s->exact = !(s->w1 > R0);
+    s->catchup = s->v0 > lsm_pl_range_cap(pc, R0, R0) * (R1 + CAP_SLACK);
+    if (s->catchup)
+        pc->floor = s->v0;
+    s->v1 = s->w1;
+    lsm_pl_guess_limits(pc, R0, &s->ga, &s->gj, &s->gs);
+    reach_speed(s);
+    arrival_speed(s, id_end);
+    if (s->catchup) {
+        plan_catchup(s);
+        return;
+    }
+    const lsm_real lo = lsm_max2(s->v0, s->v1);
+    plan_below_dips(s, id_end, lo);
+    plan_certified(s);
+    plan_cruise(s, lo);
+}
+
+/* One pass over the candidate nodes (planner.h: to the next node; if no verified piece reaches it, to the one
+ * after, and so on). Pass 0 plans across a valley node closer than SHORT_PIECE_CYCLES of travel; returns whether
+ * it skipped one. */
+static bool search_pass(search *s, int pass)
+{
+    const lsm_planner *pl = s->pl;
+    uint32_t id_end = s->id0;
+    bool skipped_here = false, skipped_short = false;
+    for (int cand = 0; cand < NODE_CANDIDATES && !s->have; cand++) {
+        if (id_end == pl->tail || (cand > 0 && !skipped_here && (blk(pl, id_end)->flags & LSM_PB_STOP)))
+            break;
+        id_end = lsm_pl_node_after(pl, id_end, &s->w1);
+        lsm_pl_pctx_init(&s->pc, pl, s->id0, s->off0, id_end);
+        skipped_here = false;
+        if (!(s->pc.D > LEN_EPS * (R1 + s->pc.D)) && id_end != pl->tail) {
+            /* a node right here (we stand on it): the next one (the end itself is planned, however short the
+             * rest: a hold may stop just before it) */
+            skipped_here = true;
+            continue;
+        }
+        if (pass == 0 && id_end != pl->tail && !(blk(pl, id_end)->flags & LSM_PB_STOP) &&
+            s->pc.D < SHORT_PIECE_CYCLES * pl->cfg.cycle_s * lsm_max2(s->v0, s->w1)) {
+            skipped_here = true;
+            skipped_short = true;
+            continue;
+        }
+        plan_to_node(s, id_end);
+    }
+    return skipped_short;
+}
+
+/* The NORMAL piece from (id0, off0) at v0 (a = 0): true and the plan, or false (pc: the last piece tried). Pass 1
+ * (only if pass 0 found nothing and skipped a short piece) also stops at the close valley node. */
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp)
+{
+    search s;
+    memset(&s, 0, sizeof s);
+    s.pl = pl;
+    s.id0 = id0;
+    s.off0 = off0;
+    s.v0 = v0;
+    const bool skipped_short = search_pass(&s, 0);
+    if (!s.have && skipped_short)
+        (void)search_pass(&s, 1);
+    if (s.have && !s.catchup)
+        staircase(&s.pc, &s.best);
+    *pcp = s.pc;
+    if (s.have)
+        *bestp = s.best;
+    return s.have;
+}
+
+/* Does a verified piece start at the interpolator's commitment point (planner.h, lsm_planner_set_horizon)?
+ * Unless `force`, a backward pass that stopped at an unchanged node after that point left the piece from there
+ * unchanged: nothing to check. (After a corner trimmed the block the current piece ends in, the piece from there
+ * is always checked: that piece must be replaced.) */
+bool lsm_pl_horizon_feasible(lsm_planner *pl, bool force)
+{
+    uint32_t id = pl->horizon_blk;
+    lsm_real off = pl->horizon_off;
+    if (!(pl->horizon_v > R0) || id_lt(id, pl->head) || !id_lt(id, pl->tail))
+        return true;
+    if (!force && id_lt(id, pl->bp_stop))
+        return true;
+    while (off > blk(pl, id)->g.len && id + 1u != pl->tail) {
+        off -= blk(pl, id)->g.len;
+        id++;
+    }
+    if (off >= blk(pl, id)->g.len && id + 1u == pl->tail)
+        return false; /* moving at the very end of the buffer */
+    pctx pc;
+    plan5 p;
+    return plan_normal(pl, id, off, pl->horizon_v, &pc, &p);
+}

@@ -1,0 +1,566 @@
+/* plan_ramp.c: pieces of path addressed by a position x, one sin² ramp, and its verification against the
+ * budgets of every block it crosses (planner.h, "Limits"); ramps fitted and placed on a stretch of path. */
+#include "planner_int.h"
+
+/* Longest ramp accepted (cycles): far beyond any real velocity change; keeps the cycle counts in range. */
+#define RAMP_MAX_CYCLES 0x1000000u
+/* When 3 beta_j v |a| takes more than CROSS_SHARE_MAX of the jerk room, the acceleration is lowered so that it takes
+ * CROSS_SHARE_TARGET of it (and the jerk the rest): balancing the two instead of starving the jerk. */
+#define CROSS_SHARE_MAX LSM_R(0.9)
+#define CROSS_SHARE_TARGET LSM_R(0.5)
+/* Position at a speed: Newton steps stop below this share of a cycle, after at most SPEED_POS_ITER steps. */
+#define SPEED_POS_TOL_CYCLES LSM_R(1e-7)
+#define SPEED_POS_ITER 24
+/* Rescaling after a failed check: just below the measured ratio first; after RESCALE_FINE_ITER tries, bigger
+ * steps (whole-cycle quantisation can keep the peaks where they were). */
+#define RESCALE_FINE LSM_R(0.995)
+#define RESCALE_COARSE LSM_R(0.9)
+#define RESCALE_FINE_ITER 12
+/* Limits below this are no ramp at all (the fit gives up). */
+#define LIMIT_FLOOR LSM_R(1e-9)
+/* Tuning up a verified ramp: only when a ratio leaves this much room, to just below it, by at most TUNE_UP_MAX at a
+ * time and at most TUNE_UPS times (each try costs a full verification). */
+#define TUNE_UP_ROOM LSM_R(1.2)
+#define TUNE_UP_SHARE LSM_R(0.99)
+#define TUNE_UP_MAX LSM_R(8.0)
+#define TUNE_UPS 2
+/* A ramp moved off a block that caps it moves at least this much (relative): progress of the placement loops. */
+#define MOVE_NUDGE LSM_R(1e-6)
+/* Tangential limits of a block whose axes do not bound them (no motion along any limited axis): very large. */
+#define UNBOUNDED_A LSM_R(1e12)
+#define UNBOUNDED_J LSM_R(1e15)
+#define UNBOUNDED_S LSM_R(1e18)
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* pieces of path: blocks addressed by a position x relative to a start (id0, off0)                             */
+
+void lsm_pl_pctx_init(pctx *pc, const lsm_planner *pl, uint32_t id0, lsm_real off0, uint32_t id_end)
+{
+    pc->pl = pl;
+    pc->id0 = id0;
+    pc->off0 = off0;
+    pc->id_end = id_end;
+    pc->floor = R0;
+    pc->cid = id0;
+    pc->cx = -off0;
+    lsm_real d = -off0;
+    for (uint32_t id = id0; id != id_end; id++)
+        d += blk(pl, id)->g.len;
+    pc->D = d;
+}
+
+/* Moves the cursor to the block that contains x (clamped to the piece's blocks). */
+void lsm_pl_seek(pctx *pc, lsm_real x)
+{
+    const lsm_planner *pl = pc->pl;
+    while (pc->cid != pc->id0 && x < pc->cx) {
+        pc->cid--;
+        pc->cx -= blk(pl, pc->cid)->g.len;
+    }
+    for (;;) {
+        const lsm_real len = blk(pl, pc->cid)->g.len;
+        if (x < pc->cx + len || pc->cid + 1u == pc->id_end)
+            break;
+        pc->cx += len;
+        pc->cid++;
+    }
+}
+
+/* Lowest cap over [xa, xb]. */
+lsm_real lsm_pl_range_cap(pctx *pc, lsm_real xa, lsm_real xb)
+{
+    lsm_pl_seek(pc, xa);
+    lsm_real m = LSM_REAL_MAX;
+    uint32_t id = pc->cid;
+    lsm_real x = pc->cx;
+    for (;;) {
+        const lsm_pblock *b = blk(pc->pl, id);
+        m = lsm_min2(m, cap_floor(pc->pl, id, b, pc->floor));
+        x += b->g.len;
+        id++;
+        if (!(x < xb) || id == pc->id_end)
+            break;
+    }
+    return m;
+}
+
+bool lsm_pl_region_ok(pctx *pc, lsm_real xa, lsm_real xb, lsm_real v)
+{
+    if (!(v > R0))
+        return true;
+    if (xb < xa)
+        return true;
+    return v <= lsm_pl_range_cap(pc, xa, xb) * (R1 + CAP_SLACK);
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* ramps: one sin² velocity change                                                                              */
+
+bool lsm_pl_ramp_plan(ramp *r, lsm_real dt, lsm_real v0, lsm_real v1, lsm_real a, lsm_real j, lsm_real s)
+{
+    r->v0 = v0;
+    r->v1 = v1;
+    r->a_lim = a;
+    r->j_lim = j;
+    r->s_lim = s;
+    const lsm_real dv = lsm_fabs(v1 - v0);
+    r->iv.n1_cycles = r->iv.n2_cycles = r->iv.n4_cycles = 0;
+    r->jp = R0;
+    r->dist = R0;
+    if (!(dv > R0))
+        return true;
+    if (!(a > R0) || !(j > R0) || !(s > R0))
+        return false;
+    const lsm_scurve_limits lim = {a, j, s};
+    if (!lsm_scurve_strict_intervals(&lim, dt, dv, &r->iv))
+        return false;
+    const uint32_t n = lsm_scurve_total_cycles(&r->iv);
+    if (n == 0 || n > RAMP_MAX_CYCLES)
+        return false;
+    r->jp = (v1 - v0) / lsm_scurve_jerk_den(&r->iv, dt);
+    r->dist = (v0 + v1) * (lsm_real)n * dt / LSM_R(2.0);
+    return true;
+}
+
+static lsm_real ramp_apeak(const ramp *r, lsm_real dt)
+{
+    return lsm_fabs(r->jp) * (lsm_real)(r->iv.n1_cycles + r->iv.n2_cycles) * dt;
+}
+
+static lsm_real ramp_speak(const ramp *r, lsm_real dt)
+{
+    if (r->iv.n1_cycles == 0)
+        return R0;
+    return lsm_fabs(r->jp) * PI_R / (LSM_R(2.0) * (lsm_real)r->iv.n1_cycles * dt);
+}
+
+/* sin and cos of pi q / 8, q = 0..8 */
+static const lsm_real k_sin8[9] = {LSM_R(0.0), LSM_R(0.38268343236508977), LSM_R(0.70710678118654752),
+                                   LSM_R(0.92387953251128676), LSM_R(1.0), LSM_R(0.92387953251128676),
+                                   LSM_R(0.70710678118654752), LSM_R(0.38268343236508977), LSM_R(0.0)};
+static const lsm_real k_cos8[9] = {LSM_R(1.0), LSM_R(0.92387953251128676), LSM_R(0.70710678118654752),
+                                   LSM_R(0.38268343236508977), LSM_R(0.0), LSM_R(-0.38268343236508977),
+                                   LSM_R(-0.70710678118654752), LSM_R(-0.92387953251128676), LSM_R(-1.0)};
+
+/* State after tau into a phase of length T, given sin and cos of phi = pi tau / T (sin² phases). */
+static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi,
+                     lsm_kin *out)
+{
+    lsm_real u0, u1, u2, u3;
+    const lsm_real t = tau;
+    if (ph->shape == LSM_PHASE_CONST) {
+        u0 = R1;
+        u1 = t;
+        u2 = t * t / LSM_R(2.0);
+        u3 = t * t * t / LSM_R(6.0);
+    } else {
+        const lsm_real w = PI_R / (LSM_R(2.0) * T);
+        const lsm_real sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+        u0 = (R1 - sg * cphi) / LSM_R(2.0);
+        u1 = t / LSM_R(2.0) - sg * sphi / (LSM_R(4.0) * w);
+        u2 = t * t / LSM_R(4.0) - sg * (R1 - cphi) / (LSM_R(8.0) * w * w);
+        u3 = t * t * t / LSM_R(12.0) - sg * t / (LSM_R(8.0) * w * w) + sg * sphi / (LSM_R(16.0) * w * w * w);
+    }
+    const lsm_real jk = ph->jerk_mm_s3;
+    const lsm_kin a = *s0;
+    out->j_mm_s3 = jk * u0;
+    out->a_mm_s2 = a.a_mm_s2 + jk * u1;
+    out->v_mm_s = a.v_mm_s + a.a_mm_s2 * t + jk * u2;
+    out->s_mm = a.s_mm + a.v_mm_s * t + a.a_mm_s2 * t * t / LSM_R(2.0) + jk * u3;
+}
+
+typedef struct rcheck {
+    lsm_real ra, rj, rs;  /* >= 1: the budgets hold; < 1: scale the ramp's a, j, snap by this */
+    int vviol;            /* a speed above a block's cap */
+    lsm_real vx0, vx1;    /* that block's extent (x) */
+    lsm_real vcap;        /* and its cap */
+} rcheck;
+
+/* One sub-interval against the blocks it touches. */
+static void check_span(pctx *pc, lsm_real xa, lsm_real xb, lsm_real vhi, lsm_real amax, lsm_real jmax, lsm_real sn,
+                       rcheck *res)
+{
+    const lsm_planner *pl = pc->pl;
+    if (xb < xa) {
+        const lsm_real t = xa;
+        xa = xb;
+        xb = t;
+    }
+    lsm_pl_seek(pc, xa);
+    uint32_t id = pc->cid;
+    lsm_real x = pc->cx;
+    for (;;) {
+        const lsm_pblock *b = blk(pl, id);
+        const lsm_real cap = cap_floor(pl, id, b, pc->floor);
+        if (vhi > cap * (R1 + CAP_SLACK)) {
+            if (!res->vviol) {
+                res->vviol = 1;
+                res->vx0 = x;
+                res->vx1 = x + b->g.len;
+                res->vcap = cap;
+            }
+            return;
+        }
+        coef c;
+        coef_get(b, &c);
+        const lsm_real v = vhi;
+        if (amax > R0 && c.aa > R0) {
+            const lsm_real al = (R1 - c.ba * v * v) / c.aa;
+            const lsm_real r = al > R0 ? al / amax : R0;
+            if (r < res->ra)
+                res->ra = r;
+        }
+        if (c.aj > R0) {
+            const lsm_real room = R1 - c.gj * v * v * v;
+            const lsm_real cross = LSM_R(3.0) * c.bj * v * amax;
+            if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
+                const lsm_real r = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
+                if (r < res->ra)
+                    res->ra = r;
+                if (res->rj > CROSS_SHARE_TARGET)
+                    res->rj = CROSS_SHARE_TARGET;
+            } else if (jmax > R0) {
+                const lsm_real r = (room - cross) / c.aj / jmax;
+                if (r < res->rj)
+                    res->rj = r;
+            }
+        }
+        if (sn > R0 && c.as > R0) {
+            const lsm_real r = (R1 / c.as) / sn;
+            if (r < res->rs)
+                res->rs = r;
+        }
+        x += b->g.len;
+        id++;
+        if (!(x < xb) || id == pc->id_end)
+            break;
+    }
+}
+
+/* Verifies a ramp placed at x_s (its start). */
+static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
+{
+    lsm_planner *pl = (lsm_planner *)pc->pl; /* statistics only */
+    pl->stats.checks++;
+    res->ra = res->rj = res->rs = LSM_REAL_MAX;
+    res->vviol = 0;
+    const lsm_real dt = pl->cfg.cycle_s;
+    lsm_phase ph[7];
+    lsm_scurve_phases(&r->iv, r->jp, ph);
+    lsm_kin st = {R0, r->v0, R0, R0};
+    const lsm_real sn = ramp_speak(r, dt);
+    if (lsm_scurve_total_cycles(&r->iv) == 0) {
+        check_span(pc, x_s, x_s, r->v0, R0, R0, R0, res);
+        return;
+    }
+    for (int p = 0; p < 7; p++) {
+        const uint32_t n = ph[p].n_cycles;
+        if (n == 0)
+            continue;
+        const lsm_real T = (lsm_real)n * dt;
+        int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
+        lsm_kin prev = st, cur;
+        if (Q > 1) {
+            /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
+             * end values, and they bound those of every part): where that holds, so do the parts; the finer
+             * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
+            lsm_kin e;
+            lsm_phase_end(&ph[p], dt, &st, &e);
+            rcheck whole = *res;
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, lsm_max2(st.v_mm_s, e.v_mm_s),
+                       lsm_max2(lsm_fabs(st.a_mm_s2), lsm_fabs(e.a_mm_s2)),
+                       lsm_max2(lsm_fabs(st.j_mm_s3), lsm_fabs(e.j_mm_s3)), ph[p].shape == LSM_PHASE_CONST ? R0 : sn,
+                       &whole);
+            if (!whole.vviol && whole.ra >= R1 && whole.rj >= R1 && whole.rs >= R1) {
+                res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
+                res->rj = lsm_min2(res->rj, whole.rj);
+                res->rs = lsm_min2(res->rs, whole.rs);
+                st = e;
+                continue;
+            }
+        }
+        for (int q = 1; q <= Q; q++) {
+            const int k8 = q * (8 / Q);
+            if (q == Q)
+                lsm_phase_end(&ph[p], dt, &st, &cur);
+            else
+                phase_at(&ph[p], T, &st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &cur);
+            const lsm_real vhi = lsm_max2(prev.v_mm_s, cur.v_mm_s);
+            const lsm_real amax = lsm_max2(lsm_fabs(prev.a_mm_s2), lsm_fabs(cur.a_mm_s2));
+            const lsm_real jmax = lsm_max2(lsm_fabs(prev.j_mm_s3), lsm_fabs(cur.j_mm_s3));
+            check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, vhi, amax, jmax, ph[p].shape == LSM_PHASE_CONST ? R0 : sn,
+                       res);
+            if (res->vviol)
+                return;
+            prev = cur;
+        }
+        st = cur;
+    }
+}
+
+static bool rcheck_ok(const rcheck *c)
+{
+    return !c->vviol && c->ra >= R1 && c->rj >= R1 && c->rs >= R1;
+}
+
+/* Ramp-relative position where the speed equals c (the ramp is monotone; c between v0 and v1). */
+static lsm_real ramp_pos_at_speed(const ramp *r, lsm_real dt, lsm_real c)
+{
+    lsm_phase ph[7];
+    lsm_scurve_phases(&r->iv, r->jp, ph);
+    lsm_kin st = {R0, r->v0, R0, R0};
+    const bool up = r->v1 > r->v0;
+    for (int p = 0; p < 7; p++) {
+        if (ph[p].n_cycles == 0)
+            continue;
+        lsm_kin e;
+        lsm_phase_end(&ph[p], dt, &st, &e);
+        const bool crosses = up ? (e.v_mm_s >= c) : (e.v_mm_s <= c);
+        if (crosses) {
+            /* v is monotone in the phase and its derivative a is known: Newton steps kept inside the bracket
+             * [lo, hi] (bisection when a step would leave it) until a step is far below a cycle; the answer is
+             * taken on the side where the speed has been reached (hi), as the bisection it replaces did */
+            lsm_real lo = R0, hi = (lsm_real)ph[p].n_cycles * dt;
+            const lsm_real tol = SPEED_POS_TOL_CYCLES * dt;
+            const lsm_real dv_ph = e.v_mm_s - st.v_mm_s;
+            lsm_real t = dv_ph != R0 ? hi * (c - st.v_mm_s) / dv_ph : hi;
+            for (int it = 0; it < SPEED_POS_ITER && hi - lo > tol; it++) {
+                if (!(t > lo && t < hi))
+                    t = (lo + hi) / LSM_R(2.0);
+                lsm_kin m;
+                lsm_phase_advance(&ph[p], dt, &st, t, &m);
+                const bool past = up ? (m.v_mm_s >= c) : (m.v_mm_s <= c);
+                if (past)
+                    hi = t;
+                else
+                    lo = t;
+                const lsm_real step = m.a_mm_s2 != R0 ? (c - m.v_mm_s) / m.a_mm_s2 : hi - lo;
+                if (lsm_fabs(step) < tol) {
+                    if (!past)
+                        hi = lsm_min2(hi, t + tol); /* (v moves by a tol there: reached within rounding) */
+                    break;
+                }
+                t += step;
+            }
+            lsm_kin m;
+            lsm_phase_advance(&ph[p], dt, &st, hi, &m);
+            return m.s_mm;
+        }
+        st = e;
+    }
+    return r->dist;
+}
+
+/* First guess of the tangential limits near x: the block's budgets at rest. */
+void lsm_pl_guess_limits(pctx *pc, lsm_real x, lsm_real *a, lsm_real *j, lsm_real *s)
+{
+    lsm_pl_seek(pc, x);
+    coef c;
+    coef_get(blk(pc->pl, pc->cid), &c);
+    *a = c.aa > R0 ? R1 / c.aa : UNBOUNDED_A;
+    *j = c.aj > R0 ? R1 / c.aj : UNBOUNDED_J;
+    *s = c.as > R0 ? R1 / c.as : UNBOUNDED_S;
+}
+
+/* Lowers the limits after a check that failed on the budgets. */
+static bool rescale(ramp *r, lsm_real dt, const rcheck *c, int it)
+{
+    const lsm_real k = it > RESCALE_FINE_ITER ? RESCALE_COARSE : RESCALE_FINE;
+    bool changed = false;
+    if (c->ra < R1) {
+        const lsm_real na = lsm_min2(r->a_lim, ramp_apeak(r, dt) * c->ra * k);
+        changed |= na < r->a_lim;
+        r->a_lim = na;
+    }
+    if (c->rj < R1) {
+        const lsm_real nj = lsm_min2(r->j_lim, lsm_fabs(r->jp) * c->rj * k);
+        changed |= nj < r->j_lim;
+        r->j_lim = nj;
+    }
+    if (c->rs < R1) {
+        const lsm_real ns = lsm_min2(r->s_lim, ramp_speak(r, dt) * c->rs * k);
+        changed |= ns < r->s_lim;
+        r->s_lim = ns;
+    }
+    if (!changed) { /* quantisation kept the peaks: force progress */
+        r->a_lim *= RESCALE_COARSE;
+        r->j_lim *= RESCALE_COARSE;
+        r->s_lim *= RESCALE_COARSE;
+    }
+    return r->a_lim > LIMIT_FLOOR && r->j_lim > LIMIT_FLOOR && r->s_lim > LIMIT_FLOOR;
+}
+
+/*
+ * Plans r (v0 -> v1) at one placement and fits its tangential limits to the budgets of the blocks it crosses:
+ * lower when the check fails, higher (twice at most) when it holds with room. The placement is the start x_at, or
+ * the end when anchor_end. Returns 1 (verified; r and *xs set), 0 (no limits fit), -1 (a speed above a block's cap:
+ * c says where).
+ */
+static int tune_ramp(pctx *pc, ramp *r, lsm_real v0, lsm_real v1, bool anchor_end, lsm_real x_at, lsm_real X0,
+                     lsm_real X1, lsm_real *xs, rcheck *c)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    ramp best;
+    bool have = false;
+    int ups = 0;
+    for (int it = 0; it < FIT_ITER; it++) {
+        const lsm_real x = anchor_end ? x_at - r->dist : x_at;
+        const lsm_real tol = LEN_EPS * (R1 + lsm_fabs(X0) + lsm_fabs(X1));
+        if (x < X0 - tol || x + r->dist > X1 + tol) {
+            if (have) {
+                *r = best;
+                *xs = anchor_end ? x_at - r->dist : x_at;
+                return 1;
+            }
+            return 0;
+        }
+        ramp_check(pc, r, x, c);
+        if (c->vviol) {
+            if (have) {
+                *r = best;
+                *xs = anchor_end ? x_at - r->dist : x_at;
+                return 1;
+            }
+            return -1;
+        }
+        if (rcheck_ok(c)) {
+            best = *r;
+            have = true;
+            *xs = x;
+            const lsm_real room = TUNE_UP_ROOM;
+            if (ups >= TUNE_UPS || !(c->ra > room || c->rj > room))
+                return 1;
+            /* try faster */
+            ups++;
+            const lsm_real na = c->ra > room ? lsm_min2(ramp_apeak(r, dt) * c->ra * TUNE_UP_SHARE, r->a_lim * TUNE_UP_MAX) : r->a_lim;
+            const lsm_real nj = c->rj > room ? lsm_min2(lsm_fabs(r->jp) * c->rj * TUNE_UP_SHARE, r->j_lim * TUNE_UP_MAX) : r->j_lim;
+            const lsm_real ns = c->rs > room ? lsm_min2(ramp_speak(r, dt) * c->rs * TUNE_UP_SHARE, r->s_lim * TUNE_UP_MAX) : r->s_lim;
+            if (!(na > r->a_lim || nj > r->j_lim || ns > r->s_lim))
+                return 1;
+            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(na, r->a_lim), lsm_max2(nj, r->j_lim), lsm_max2(ns, r->s_lim)) ||
+                lsm_scurve_total_cycles(&r->iv) >= lsm_scurve_total_cycles(&best.iv)) {
+                *r = best;
+                return 1;
+            }
+            continue;
+        }
+        if (have) {
+            *r = best;
+            *xs = anchor_end ? x_at - r->dist : x_at;
+            return 1;
+        }
+        if (!rescale(r, dt, c, it) || !lsm_pl_ramp_plan(r, dt, v0, v1, r->a_lim, r->j_lim, r->s_lim))
+            return 0;
+    }
+    if (have) {
+        *r = best;
+        *xs = anchor_end ? x_at - r->dist : x_at;
+        return 1;
+    }
+    return 0;
+}
+
+/*
+ * Decelerating ramp v0 -> v1 (v0 > v1) on [X0, X1]: placed as late as it verifies, ending at X1 exactly when
+ * `exact`. Region checks: lead cruise at v0 on [X0, start] (if check_lead), trail cruise at v1 on [end, X1].
+ * Returns the ramp and its start.
+ */
+bool lsm_pl_fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real v1, bool exact, bool check_lead,
+                      ramp *r, lsm_real *xs_out)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    lsm_real a, j, s;
+    lsm_pl_guess_limits(pc, X1, &a, &j, &s);
+    if (!lsm_pl_ramp_plan(r, dt, v0, v1, a, j, s))
+        return false;
+    lsm_real xe = X1, last_vx = LSM_REAL_MAX;
+    for (int it = 0; it < FIT_ITER; it++) {
+        rcheck c;
+        lsm_real xs;
+        const int t = tune_ramp(pc, r, v0, v1, true, xe, X0, X1, &xs, &c);
+        if (t == 0)
+            return false;
+        if (t < 0) {
+            xs = xe - r->dist;
+            if (exact || c.vcap < v1 * (R1 - CAP_SLACK) || c.vx0 <= xs)
+                return false;
+            lsm_real nxs = c.vx0 - ramp_pos_at_speed(r, dt, c.vcap);
+            if (c.vx0 == last_vx || !(nxs < xs))
+                nxs = c.vx0 - r->dist; /* end the ramp before the block */
+            if (!(nxs < xs))
+                nxs = xs - MOVE_NUDGE * (R1 + r->dist);
+            last_vx = c.vx0;
+            xe = nxs + r->dist;
+            lsm_pl_guess_limits(pc, xe, &a, &j, &s);
+            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(a, r->a_lim), lsm_max2(j, r->j_lim), lsm_max2(s, r->s_lim)))
+                return false;
+            continue;
+        }
+        if (check_lead && !lsm_pl_region_ok(pc, X0, xs, v0))
+            return false;
+        if (!lsm_pl_region_ok(pc, xs + r->dist, X1, v1))
+            return false;
+        *xs_out = xs;
+        return true;
+    }
+    return false;
+}
+
+/*
+ * Accelerating ramp v0 -> v1 (v1 > v0) starting at or after X0, placed as early as it verifies (a lead cruise
+ * at v0 if needed; none from rest). With check_trail, cruising at v1 from its end to X1 must fit too.
+ */
+bool lsm_pl_fit_accel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real v1, bool check_trail, ramp *r,
+                      lsm_real *xs_out)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    lsm_real a, j, s;
+    lsm_pl_guess_limits(pc, X0, &a, &j, &s);
+    if (!lsm_pl_ramp_plan(r, dt, v0, v1, a, j, s))
+        return false;
+    lsm_real xs = X0, last_vx = -LSM_REAL_MAX;
+    for (int it = 0; it < FIT_ITER; it++) {
+        rcheck c;
+        lsm_real xr;
+        const int t = tune_ramp(pc, r, v0, v1, false, xs, X0, X1, &xr, &c);
+        if (t == 0)
+            return false;
+        if (t < 0) {
+            if (!(v0 > R0) || c.vcap < v0 * (R1 - CAP_SLACK))
+                return false;
+            /* move the start so that the ramp reaches the cap at the block's end; if the same block is hit again
+             * (the sub-interval bound is coarser than the ramp), start after the block */
+            lsm_real nxs = c.vx1 - ramp_pos_at_speed(r, dt, c.vcap);
+            if (c.vx1 == last_vx || !(nxs > xs))
+                nxs = c.vx1;
+            if (!(nxs > xs))
+                nxs = xs + MOVE_NUDGE * (R1 + r->dist);
+            last_vx = c.vx1;
+            xs = nxs;
+            lsm_pl_guess_limits(pc, xs, &a, &j, &s);
+            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(a, r->a_lim), lsm_max2(j, r->j_lim), lsm_max2(s, r->s_lim)))
+                return false;
+            continue;
+        }
+        if (!lsm_pl_region_ok(pc, X0, xr, v0))
+            return false;
+        if (check_trail && !lsm_pl_region_ok(pc, xr + r->dist, X1, v1))
+            return false;
+        *xs_out = xr;
+        return true;
+    }
+    return false;
+}
+
+/* Decelerating ramp starting exactly at X0 (override catch-up, feed hold). */
+bool lsm_pl_fit_decel_now(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real v1, ramp *r)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s;
+    lsm_real a, j, s;
+    lsm_pl_guess_limits(pc, X0, &a, &j, &s);
+    if (!lsm_pl_ramp_plan(r, dt, v0, v1, a, j, s))
+        return false;
+    rcheck c;
+    lsm_real xs;
+    return tune_ramp(pc, r, v0, v1, false, X0, X0, X1, &xs, &c) == 1;
+}

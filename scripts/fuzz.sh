@@ -64,7 +64,7 @@ for t in "${targets[@]}"; do
   after=$(ls "$found" | wc -l)
   execs=$(grep -oE "stat::number_of_executed_units: *[0-9]+" "$log" | grep -oE "[0-9]+$" | awk "{s+=\$1} END {if (NR) print s}")
   [ -n "$execs" ] || execs=$(grep -oE "#[0-9]+" "$log" | tail -1 | tr -d '#')
-  known=$( { cat "$LSM_FUZZ_KNOWN_LOG" 2>/dev/null || true; } | cut -d' ' -f1 | sort | uniq -c | awk '{printf "%s%s %s", NR > 1 ? ", " : "", $1, $2}')
+  known=$( { cat "$LSM_FUZZ_KNOWN_LOG" 2>/dev/null || true; } | cut -d' ' -f1 | sort | uniq -c | awk '{printf "%s%s %s", (NR > 1 ? ", " : ""), $1, $2}')
   [ -n "$known" ] || known=none
   if [ $rc -eq 0 ] && [ "$after" -eq "$before" ]; then
     passed=$((passed + 1))

@@ -31,6 +31,9 @@ from lissom_hil.trace import check_limits
 SYNC_S = 0.02
 MASTER_ID = 0x10
 # a zig-zag of long lines at 3000 mm/min: about 5 s of motion, so that every fault lands mid-path
+# bounds of the waits for a path's end: its ~5 s of motion took 20 s of wall time in the emulated guest beside a
+# CPU hog (the node's 1 ms ticks up to 220 ms late, 20 000 overruns in 8 800 cycles): events, not delays
+LOADED_S = 90.0
 PROGRAM = "G21 G90\n" + "".join("G1 X%d Y%d F3000\n" % (40 * (i + 1), 30 * (i % 2)) for i in range(6))
 
 
@@ -57,11 +60,11 @@ def _stream_and_start(rig):
     streamer.stream(blocks)
     assert rig.read(0x5004) == len(blocks)
     rig.write(0x5000, 1)
-    rig.wait_moving(0, 15000, 5.0)  # 15 mm along the first block
+    rig.wait_moving(0, 15000, 20.0)  # 15 mm along the first block
     return blocks
 
 
-def _at_rest(rig, what, timeout=5.0):
+def _at_rest(rig, what, timeout=20.0):
     """Waits until the demand of every axis stops changing (two reads a cycle apart agree), returns it."""
     def still():
         a = [rig.demand(k) for k in range(3)]
@@ -95,7 +98,7 @@ def _resume_to_end(rig, blocks):
     rig.write(0x5000, 3)
     last = len(blocks)
     rig.wait_until(lambda: rig.read(0x5005) == last and rig.read(0x5003) == rig.read(0x5007)
-                   and rig.read(0x6041) & 0x0400, 20.0, "path not finished after the resume", poll=0.05)
+                   and rig.read(0x6041) & 0x0400, LOADED_S, "path not finished after the resume", poll=0.05)
     end = blocks[-1].end
     assert [rig.demand(k) for k in range(2)] == [round(end[0] * 1000), round(end[1] * 1000)]
 
@@ -107,9 +110,9 @@ def test_fault_nmt_stop_mid_path(rig):
     blocks = _stream_and_start(rig)
     m = rig.frames.mark()
     rig.nmt("STOPPED")
-    assert rig.wait_heartbeat(0x04, 2.0, m) is not None, "no heartbeat in STOPPED"
+    assert rig.wait_heartbeat(0x04, 10.0, m) is not None, "no heartbeat in STOPPED"
     rig.nmt("PRE-OPERATIONAL")  # SDO again (the node does not serve SDO in STOPPED)
-    assert rig.wait_heartbeat(0x7F, 2.0) is not None
+    assert rig.wait_heartbeat(0x7F, 10.0) is not None
     stop = _at_rest(rig, "axes not at rest after the NMT stop")
     assert 0 < stop[0] < round(blocks[-1].end[0] * 1000), "stopped at %s" % stop
     assert rig.read(0x5004) == len(blocks), "accepted blocks lost at the stop"
@@ -125,7 +128,7 @@ def test_fault_nmt_reset_mid_path(rig):
     blocks = _stream_and_start(rig)
     m = rig.frames.mark()
     rig.nmt("RESET")
-    boot = rig.frames.wait(lambda f: f.id == 0x700 + rig.node_id and f.data == b"\x00", 5.0, m)
+    boot = rig.frames.wait(lambda f: f.id == 0x700 + rig.node_id and f.data == b"\x00", 10.0, m)
     assert boot is not None, "no boot-up frame after the reset"
     stop = _at_rest(rig, "axes not at rest after the reset")
     assert 0 < stop[0] < round(blocks[-1].end[0] * 1000)
@@ -142,18 +145,18 @@ def test_fault_master_lost_mid_path(rig):
     rig.start_heartbeat(MASTER_ID, 0.05)
     rig.write(0x1016, (MASTER_ID << 16) | 200, sub=1)
     _setup(rig)
-    assert rig.frames.wait_count(lambda f: f.id == 0x700 + MASTER_ID, 6, 5.0, m0)
+    assert rig.frames.wait_count(lambda f: f.id == 0x700 + MASTER_ID, 6, 10.0, m0)
     blocks = _stream_and_start(rig)
     m = rig.frames.mark()
     rig.stop_heartbeat()
-    e = rig.frames.wait_emcy(rig.node_id, 0x8130, 3.0, m)
+    e = rig.frames.wait_emcy(rig.node_id, 0x8130, 10.0, m)
     assert e is not None and e.info == MASTER_ID, "no heartbeat EMCY"
-    assert rig.wait_heartbeat(0x7F, 2.0, m) is not None, "not PRE-OPERATIONAL"
+    assert rig.wait_heartbeat(0x7F, 10.0, m) is not None, "not PRE-OPERATIONAL"
     stop = _at_rest(rig, "axes not at rest after the master was lost")
     assert 0 < stop[0] < round(blocks[-1].end[0] * 1000)
     m2 = rig.frames.mark()
     rig.start_heartbeat(MASTER_ID, 0.05)
-    assert rig.frames.wait_emcy(rig.node_id, 0x0000, 2.0, m2) is not None, "no error-reset EMCY"
+    assert rig.frames.wait_emcy(rig.node_id, 0x0000, 10.0, m2) is not None, "no error-reset EMCY"
     rig.operational()
     _resume_to_end(rig, blocks)
     tr = _check_trace(rig, "master_lost")
@@ -169,14 +172,14 @@ def test_fault_busoff_mid_path(rig):
     m = rig.frames.mark()
     rig.network.bus.send(can.Message(arbitration_id=CAN_ERR_BUSOFF, is_error_frame=True, is_extended_id=False,
                                      data=b"\0" * 8, dlc=8))
-    rig.frames.wait(lambda f: f.err, 2.0, m)
+    rig.frames.wait(lambda f: f.err, 10.0, m)
     # the node's own cycle tells when it has stopped: its trace (it is silent on the bus while off)
-    rig.wait_until(lambda: _trace_at_rest(rig), 5.0, "axes not at rest in the trace after bus-off", poll=0.1)
+    rig.wait_until(lambda: _trace_at_rest(rig), 20.0, "axes not at rest in the trace after bus-off", poll=0.1)
     m2 = rig.frames.mark()
     rig.network.bus.send(can.Message(arbitration_id=CAN_ERR_RESTARTED, is_error_frame=True, is_extended_id=False,
                                      data=b"\0" * 8, dlc=8))
-    assert rig.frames.wait_emcy(rig.node_id, 0x8140, 2.0, m2) is not None, "no recovered-from-bus-off EMCY"
-    assert rig.wait_heartbeat(0x7F, 2.0, m2) is not None
+    assert rig.frames.wait_emcy(rig.node_id, 0x8140, 10.0, m2) is not None, "no recovered-from-bus-off EMCY"
+    assert rig.wait_heartbeat(0x7F, 10.0, m2) is not None
     rig.operational()
     _resume_to_end(rig, blocks)
     tr = _check_trace(rig, "busoff_path")
@@ -204,19 +207,19 @@ def test_fault_estop_mid_path(rig):
         blocks = _stream_and_start(rig)
         m = rig.frames.mark()
         chip.pull(0, "pull-up")  # pressed
-        e = rig.frames.wait_emcy(rig.node_id, 0x9000, 2.0, m)
+        e = rig.frames.wait_emcy(rig.node_id, 0x9000, 10.0, m)
         assert e is not None, "no E-stop EMCY"
-        rig.wait_until(lambda: all(rig.state_of(k) == "FAULT" for k in range(3)), 5.0, "axes not in FAULT")
+        rig.wait_until(lambda: all(rig.state_of(k) == "FAULT" for k in range(3)), 20.0, "axes not in FAULT")
         stop = _at_rest(rig, "axes not at rest after the E-stop")
         assert 0 < stop[0] < round(blocks[-1].end[0] * 1000)
         assert rig.read(0x5004) == len(blocks), "accepted blocks lost at the E-stop"
         m2 = rig.frames.mark()
         chip.pull(0, "pull-down")  # released
-        assert rig.frames.wait_emcy(rig.node_id, 0x0000, 2.0, m2) is not None, "no error-reset EMCY on release"
+        assert rig.frames.wait_emcy(rig.node_id, 0x0000, 10.0, m2) is not None, "no error-reset EMCY on release"
         for k in range(3):
             rig.controlword(k, 0x00)
             rig.controlword(k, 0x80)
-        rig.wait_until(lambda: all(rig.state_of(k) == "SWITCH ON DISABLED" for k in range(3)), 3.0,
+        rig.wait_until(lambda: all(rig.state_of(k) == "SWITCH ON DISABLED" for k in range(3)), 10.0,
                        "fault reset refused after the release")
         _resume_to_end(rig, blocks)
         tr = _check_trace(rig, "estop_path")
@@ -271,7 +274,7 @@ def test_fault_frame_flood_mid_path(rig):
         rig.write(0x5000, 1)
         last = len(blocks)
         rig.wait_until(lambda: rig.read(0x5005) == last and rig.read(0x5003) == rig.read(0x5007)
-                       and rig.read(0x6041) & 0x0400, 30.0, "path not finished under the flood", poll=0.05)
+                       and rig.read(0x6041) & 0x0400, LOADED_S, "path not finished under the flood", poll=0.05)
     finally:
         stop.set()
         th.join(5)
@@ -325,7 +328,7 @@ def test_fault_lossy_bridge(rig):
         streamer.stream(blocks[2:], first_seq=3)
         last = len(blocks)
         rig.wait_until(lambda: streamer._read(0x5005) == last and streamer._read(0x5003) == streamer._read(0x5007)
-                       and streamer._read(0x6041) & 0x0400, 90.0, "path not finished behind the bridge", poll=0.05)
+                       and streamer._read(0x6041) & 0x0400, LOADED_S + 30.0, "path not finished behind the bridge", poll=0.05)
         _bridge_policy.active = False
         end = blocks[-1].end
         assert [streamer._read(0x6062 + 0x800 * k) - rig.home[k] for k in range(2)] == [

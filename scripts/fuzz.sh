@@ -62,8 +62,8 @@ for t in "${targets[@]}"; do
   "build-fuzz/bin/$t" "${opts[@]}" "$work" "${seeds[@]}" >"$log" 2>&1
   rc=$?
   after=$(ls "$found" | wc -l)
-  execs=$(grep -oE "stat::number_of_executed_units: *[0-9]+" "$log" | grep -oE "[0-9]+$" | awk "{s+=\$1} END {if (NR) print s}")
-  [ -n "$execs" ] || execs=$(grep -oE "#[0-9]+" "$log" | tail -1 | tr -d '#')
+  execs=$(grep -aoE "stat::number_of_executed_units: *[0-9]+" "$log" | grep -oE "[0-9]+$" | awk "{s+=\$1} END {if (NR) print s}")
+  [ -n "$execs" ] || execs=$(grep -aoE "#[0-9]+" "$log" | tail -1 | tr -d '#')
   known=$( { cat "$LSM_FUZZ_KNOWN_LOG" 2>/dev/null || true; } | cut -d' ' -f1 | sort | uniq -c | awk '{printf "%s%s %s", (NR > 1 ? ", " : ""), $1, $2}')
   [ -n "$known" ] || known=none
   if [ $rc -eq 0 ] && [ "$after" -eq "$before" ]; then
@@ -72,7 +72,7 @@ for t in "${targets[@]}"; do
   else
     failed=$((failed + 1))
     echo "fuzz: $t: FOUND $((after - before)) new failing inputs (exit $rc) in $found (log $log)"
-    grep -E "FUZZ VIOLATION|ERROR: (Address|Undefined|libFuzzer)|runtime error" "$log" | sort | uniq -c | sort -rn | head -8
+    grep -aE "FUZZ VIOLATION|ERROR: (Address|Undefined|libFuzzer)|runtime error" "$log" | sort | uniq -c | sort -rn | head -8
   fi
 done
 echo "fuzz: $passed passed, $failed failed"

@@ -34,6 +34,7 @@ if [ "${LISSOM_HIL_VM:-}" != 1 ] && have_vcan; then
   echo "[hil] this kernel has vcan: running directly"
   ip link show vcan0 >/dev/null 2>&1 || ip link add vcan0 type vcan
   ip link set up vcan0
+  { ip link show vcan1 >/dev/null 2>&1 || ip link add vcan1 type vcan; ip link set up vcan1; } 2>/dev/null || true
   modprobe gpio-sim >/dev/null 2>&1 || true
   mountpoint -q /sys/kernel/config || mount -t configfs configfs /sys/kernel/config >/dev/null 2>&1 || true
   LISSOM_NODE=$NODE "$PY" "${PYTEST[@]}"

@@ -1,6 +1,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -239,4 +240,87 @@ int cli_plot(const char *args)
         return -1;
     const int rc = system(cmd);
     return rc == -1 ? -1 : (WIFEXITED(rc) ? WEXITSTATUS(rc) : 128 + (WIFSIGNALED(rc) ? WTERMSIG(rc) : 0));
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* validation of options where they enter                                                                      */
+
+int cli_check_range(const char *name, double v, double lo, double hi)
+{
+    if (isfinite(v) && v >= lo && v <= hi)
+        return 0;
+    fprintf(stderr, "error: --%s %g is out of range: it must be a number in [%g, %g] (docs/host_sim.md)\n", name, v, lo,
+            hi);
+    return -1;
+}
+
+int cli_check_cycle(const char *name, double v)
+{
+    if (isfinite(v) && v > 0 && v <= CLI_CYCLE_MAX_S)
+        return 0;
+    fprintf(stderr, "error: --%s %g is out of range: the control cycle must be in (0, %g] s\n", name, v,
+            CLI_CYCLE_MAX_S);
+    return -1;
+}
+
+int cli_check_regular_file(const char *what, const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        fprintf(stderr, "error: %s '%s' cannot be read: %s\n", what, path, strerror(errno));
+        return -1;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        fprintf(stderr, "error: %s '%s' is %s, not a regular file\n", what, path,
+                S_ISDIR(st.st_mode) ? "a directory" : "a special file");
+        return -1;
+    }
+    return 0;
+}
+
+int cli_check_out_dir(const char *name, const char *dir)
+{
+    if (cli_mkdirs(dir) != 0)
+        return -1; /* "cannot create DIR" printed */
+    char probe[4200];
+    if (snprintf(probe, sizeof probe, "%s/.lissom-write-check-%ld", dir, (long)getpid()) >= (int)sizeof probe) {
+        fprintf(stderr, "error: --%s: path too long: %s\n", name, dir);
+        return -1;
+    }
+    const int fd = open(probe, O_WRONLY | O_CREAT | O_EXCL, 0644);
+    if (fd < 0) {
+        fprintf(stderr, "error: --%s '%s' is not writable: %s\n", name, dir, strerror(errno));
+        return -1;
+    }
+    close(fd);
+    unlink(probe);
+    return 0;
+}
+
+int cli_check_out_file(const char *name, const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "error: --%s '%s' is a directory\n", name, path);
+        return -1;
+    }
+    const bool existed = stat(path, &st) == 0;
+    FILE *f = fopen(path, "a"); /* "a": an existing file is left as it is until the command writes it */
+    if (!f) {
+        fprintf(stderr, "error: --%s '%s' cannot be written: %s\n", name, path, strerror(errno));
+        return -1;
+    }
+    fclose(f);
+    if (!existed)
+        unlink(path);
+    return 0;
+}
+
+int cli_check_sample_rows(const char *name, double rows, double cycle_s)
+{
+    if (rows <= (double)CLI_SAMPLES_MAX_ROWS)
+        return 0;
+    fprintf(stderr, "error: --%s: the profile has %.0f cycles of %g s, more than the %u rows --%s writes at most; "
+                    "use a longer --cycle\n", name, rows, cycle_s, CLI_SAMPLES_MAX_ROWS, name);
+    return -1;
 }

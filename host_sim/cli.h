@@ -36,6 +36,32 @@ int cli_check_unused(cli_args *a, const char *cmd);
 /* Strict number parse of a token (whole token, allows nan/inf spellings). */
 int cli_parse_number(const char *s, double *out);
 
+/* ---- validation where an option enters (every message names the option and the offending value) ----
+ * The sane ranges of lissom-sim's options (docs/host_sim.md, "Option ranges"). Units are any consistent set
+ * (mm and s by convention); the bounds are wide enough for m or mm, and narrow enough that every quantity the
+ * firmware derives from them (durations, cycle counts, distances) stays finite in float and in double. */
+#define CLI_CYCLE_MAX_S 0.1     /* the machine-file bound: a 100 ms cycle is already far slower than any drive */
+#define CLI_LIMIT_MIN 1e-6      /* below this a limit is a typo (or a unit mix-up), and durations overflow */
+#define CLI_VEL_MAX 1e6         /* mm/s: 1 km/s */
+#define CLI_ACC_MAX 1e9         /* mm/s^2: 1e5 g */
+#define CLI_JERK_MAX 1e12       /* mm/s^3 */
+#define CLI_SNAP_MAX 1e15       /* mm/s^4 */
+#define CLI_DISTANCE_MAX 1e7    /* mm: 10 km, |distance| */
+#define CLI_SAMPLES_MAX_ROWS 2000000u /* --samples: rows (cycles) written at most, about 100 MB of CSV */
+
+/* v in [lo, hi] (finite). Otherwise prints "error: --NAME VALUE is out of range: ..." and returns -1. */
+int cli_check_range(const char *name, double v, double lo, double hi);
+/* The control cycle: 0 < v <= CLI_CYCLE_MAX_S. */
+int cli_check_cycle(const char *name, double v);
+/* path names an existing regular file (not a directory, not missing); what says what it is ("program"). */
+int cli_check_regular_file(const char *what, const char *path);
+/* dir can be created (mkdir -p) and a file can be created in it: checked before a run, one message. */
+int cli_check_out_dir(const char *name, const char *dir);
+/* A --samples FILE can be created (it is created empty; the command writes it later). */
+int cli_check_out_file(const char *name, const char *path);
+/* rows <= CLI_SAMPLES_MAX_ROWS, else a message naming the row count and the cycle. */
+int cli_check_sample_rows(const char *name, double rows, double cycle_s);
+
 /* mkdir -p: creates dir and its parents (0 ok, -1 with a message on stderr). */
 int cli_mkdirs(const char *dir);
 /* Opens dir/name for writing, creating dir; the full path goes to path (size n). NULL with a message. */

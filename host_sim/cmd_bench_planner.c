@@ -234,7 +234,7 @@ int cmd_bench_planner(int argc, char **argv)
     const char *root_opt = cli_opt(&a, "root");
     const char *only = cli_opt(&a, "only");
     const char *out = cli_opt(&a, "out");
-    if (cli_check_unused(&a, "bench-planner") != 0)
+    if (cli_check_unused(&a, "bench-planner") != 0 || (out && cli_check_out_dir("out", out)))
         return 2;
     char root[1024];
     if (root_opt)

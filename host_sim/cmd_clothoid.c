@@ -214,6 +214,9 @@ static int clothoid_g2path(cli_args *a)
         fprintf(stderr, "error: clothoid g2path: --segments must be an integer 1..1000000\n");
         return 1;
     }
+    if (cli_check_range("amax", amax, CLI_LIMIT_MIN, CLI_ACC_MAX) ||
+        cli_check_range("jmax", jmax, CLI_LIMIT_MIN, CLI_JERK_MAX) || cli_check_regular_file("--gcode", path))
+        return 1;
     lsm_geom *c = NULL;
     int n = 0;
     lsm_geom_plane plane;

@@ -38,6 +38,8 @@ int cmd_demo(int argc, char **argv)
         return 2;
     if (!out)
         out = "out/demo";
+    if (cli_check_range("distance", dist, -CLI_DISTANCE_MAX, CLI_DISTANCE_MAX) || cli_check_out_dir("out", out))
+        return 2;
     /* Kombarov Table 1, Test 2 (A 1.57 m/s², J 16 m/s³, DJ 560 m/s⁴, feed 13.2 m/min), in mm */
     lsm_move_request req;
     memset(&req, 0, sizeof req);

@@ -537,6 +537,8 @@ static int exp_read(int argc, char **argv, exp_opts *o)
     o->json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "experiment kombarov"))
         return 2;
+    if (o->out && cli_check_out_dir("out", o->out))
+        return 2;
     return 0;
 }
 

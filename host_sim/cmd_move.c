@@ -66,6 +66,18 @@ int cmd_move(int argc, char **argv)
     const bool json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "move"))
         return 2;
+    for (int i = 0; i < n; i++) {
+        if (cli_check_range("distance", dist[i], -CLI_DISTANCE_MAX, CLI_DISTANCE_MAX) ||
+            cli_check_range("vmax", vmax[i], CLI_LIMIT_MIN, CLI_VEL_MAX) ||
+            cli_check_range("amax", amax[i], CLI_LIMIT_MIN, CLI_ACC_MAX) ||
+            cli_check_range("jmax", jmax[i], CLI_LIMIT_MIN, CLI_JERK_MAX) ||
+            cli_check_range("snap-max", snap[i], CLI_LIMIT_MIN, CLI_SNAP_MAX) ||
+            cli_check_range("v0", v0[i], -CLI_VEL_MAX, CLI_VEL_MAX) ||
+            cli_check_range("v1", v1[i], -CLI_VEL_MAX, CLI_VEL_MAX))
+            return 2;
+    }
+    if (cli_check_cycle("cycle", cycle) || (samples && cli_check_out_file("samples", samples)))
+        return 2;
 
     req.n_axes = (uint8_t)n;
     req.cycle_s = (lsm_real)cycle;
@@ -82,6 +94,8 @@ int cmd_move(int argc, char **argv)
         return 1;
     }
     const uint32_t total = lsm_move_total_cycles(&mv);
+    if (samples && cli_check_sample_rows("samples", (double)total + 1, cycle))
+        return 2;
     if (json) {
         printf("{\"n_cycles\":%u,\"duration\":", total);
         json_num(stdout, lsm_move_duration_s(&mv));

@@ -260,6 +260,9 @@ int cmd_run(int argc, char **argv)
         fprintf(stderr, "error: --capacity out of range\n");
         return 2;
     }
+    if (cli_check_regular_file("program", program) || cli_check_regular_file("machine file", machine) ||
+        cli_check_out_dir("out", out))
+        return 2;
     sim_machine m;
     char err[512];
     if (sim_machine_load_file(machine, &m, err, sizeof err) != SIM_MACHINE_OK) {
@@ -296,10 +299,12 @@ int cmd_run(int argc, char **argv)
         return 1;
     }
     int rc = 0;
-    if (write_csvs(out, &r, &prog) != 0)
-        rc = 1;
     char path[4200];
-    FILE *f = cli_open_out(out, "summary.json", path, sizeof path);
+    FILE *f = NULL;
+    if (write_csvs(out, &r, &prog) != 0)
+        rc = 1; /* its message is printed; the summary is not tried (one message, not two) */
+    else
+        f = cli_open_out(out, "summary.json", path, sizeof path);
     if (f) {
         print_summary(f, &o, &r, program, machine);
         fclose(f);

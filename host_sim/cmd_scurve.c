@@ -41,6 +41,12 @@ int cmd_scurve(int argc, char **argv)
     const bool json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "scurve"))
         return 2;
+    if (cli_check_range("v0", v0, 0, CLI_VEL_MAX) || cli_check_range("v1", v1, 0, CLI_VEL_MAX) ||
+        cli_check_range("amax", amax, CLI_LIMIT_MIN, CLI_ACC_MAX) ||
+        cli_check_range("jmax", jmax, CLI_LIMIT_MIN, CLI_JERK_MAX) ||
+        cli_check_range("snap-max", snap, CLI_LIMIT_MIN, CLI_SNAP_MAX) || cli_check_cycle("cycle", cycle) ||
+        (samples && cli_check_out_file("samples", samples)))
+        return 2;
 
     const lsm_scurve_limits lim = {(lsm_real)amax, (lsm_real)jmax, (lsm_real)snap};
     lsm_scurve sc;
@@ -50,6 +56,8 @@ int cmd_scurve(int argc, char **argv)
         fprintf(stderr, "error: scurve: %s (%d)\n", lsm_status_str(st), (int)st);
         return 1;
     }
+    if (samples && cli_check_sample_rows("samples", (double)lsm_scurve_total_cycles(&sc.iv) + 1, cycle))
+        return 2;
     const double dt = cycle;
     const double jp = sc.jp_mm_s3 < 0 ? -sc.jp_mm_s3 : sc.jp_mm_s3;
     struct {

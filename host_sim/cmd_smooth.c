@@ -350,6 +350,9 @@ static int sm_parse(int argc, char **argv, sm_opts *o)
         fprintf(stderr, "error: smooth: --amax and --jmax must be finite numbers > 0\n");
         return 1;
     }
+    if (cli_check_range("amax", o->amax, CLI_LIMIT_MIN, CLI_ACC_MAX) ||
+        cli_check_range("jmax", o->jmax, CLI_LIMIT_MIN, CLI_JERK_MAX) || cli_check_regular_file("--gcode", o->path))
+        return 1;
     return 0;
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what Lissom needs on Debian 12 (run as root), idempotently:
-#   apt packages (compilers, cmocka, the Arm cross toolchain, QEMU, CAN and GPIO tools) and the Python venv
+#   apt packages (compilers, clang-14 and its libFuzzer/sanitizer runtimes for scripts/fuzz.sh, cmocka, the Arm cross toolchain, QEMU, CAN and GPIO tools) and the Python venv
 #   in .venv with hil/requirements.txt and the lissom_hil package. Fast when everything is already there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,7 +10,7 @@ PKGS=(gcc make cmake ninja-build pkg-config git libcmocka-dev
       gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm
       libgpiod-dev gpiod can-utils iproute2
       qemu-system-x86 busybox-static xz-utils gcc-12
-      clang-format clang-tidy)
+      clang-format clang-tidy clang-14 libclang-rt-14-dev)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -4,6 +4,7 @@
 #   2. ctest: the cmocka unit tests, double and float builds (randomized tests at their CI counts)
 #   3. the Cortex-M4F cross build: -Wall -Wextra -Werror, no heap or printf linked, images run under QEMU
 #   4. pytest: the Python tests (CLI contracts, references, plots, EDS, ...)
+#   4b. fuzz: each libFuzzer target (ASan + UBSan) for a few seconds (scripts/fuzz.sh --brief)
 #   5. HIL: the CANopen node on a real vcan bus (a QEMU guest with Debian's kernel when this one has no CAN), then
 #      the same suite against the Cortex-M4F controller image under QEMU, over slcan on TCP
 # Ends with one line "tests: N passed, N failed".
@@ -49,6 +50,20 @@ export LISSOM_SIM="$PWD/build/bin/lissom-sim"
 export LISSOM_SIM_FLOAT="$PWD/build-float/bin/lissom-sim"   # tests/py/test_float_sim.py
 .venv/bin/python -m pytest -q -p no:cacheprovider tests/py 2>&1 | tee "$log"
 count_pytest "$log" "${PIPESTATUS[0]}"
+
+# ---- fuzz: every libFuzzer target briefly (about 30 s in all; scripts/fuzz.sh --brief, docs/reliability.md);
+# ---- ctest above already replayed the seeds and every past finding. Counted as one test per target.
+echo "== fuzz (scripts/fuzz.sh --brief)"
+scripts/fuzz.sh --brief 2>&1 | tee "$log"
+frc=${PIPESTATUS[0]}
+fline=$(grep -E "^fuzz: [0-9]+ passed, [0-9]+ failed" "$log" | tail -1)
+if [ -n "$fline" ]; then
+  passed=$((passed + $(echo "$fline" | sed -E 's/fuzz: ([0-9]+) passed.*/\1/')))
+  failed=$((failed + $(echo "$fline" | sed -E 's/.* ([0-9]+) failed.*/\1/')))
+else
+  failed=$((failed + 1))
+fi
+[ "$frc" -eq 0 ] || status=1
 
 # ---- HIL: hil/run_hil.sh runs the CANopen suite hil/tests against build/bin/lissom-node on vcan0, inside one
 # ---- QEMU guest when this kernel has no CAN (docs/hil.md); counted like pytest's.

@@ -151,6 +151,25 @@ class FrameLog:
                     return None
                 self.cond.wait(left)
 
+    def wait_count(self, pred, n, timeout=5.0, since=0):
+        """The first n frames (captured at index >= since) matching pred, waiting up to timeout seconds for the n-th
+        (an event, not a fixed delay: under load the wait only gets longer); None if fewer arrived."""
+        got = []
+        t_end = time.monotonic() + timeout
+        i = since
+        with self.cond:
+            while True:
+                while i < len(self.frames):
+                    if pred(self.frames[i]):
+                        got.append(self.frames[i])
+                        if len(got) >= n:
+                            return got
+                    i += 1
+                left = t_end - time.monotonic()
+                if left <= 0:
+                    return None
+                self.cond.wait(left)
+
     def emcy(self, node_id, since=0):
         out = []
         for f in self.select(lambda f: f.id == 0x80 + node_id and not f.err and not f.ext, since):

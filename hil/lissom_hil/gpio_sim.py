@@ -52,9 +52,8 @@ class GpioSim:
         self.name = _read(os.path.join(bank, "chip_name"))
         dev = _read(os.path.join(self.dir, "dev_name"))
         self.sysfs = "/sys/devices/platform/%s/%s" % (dev, self.name)
-        for _ in range(100):  # the sysfs attributes appear shortly after "live"
-            if os.path.exists(os.path.join(self.sysfs, "sim_gpio0", "value")):
-                break
+        t_end = time.monotonic() + 10.0  # the sysfs attributes appear shortly after "live" (a bound, not a delay)
+        while not os.path.exists(os.path.join(self.sysfs, "sim_gpio0", "value")) and time.monotonic() < t_end:
             time.sleep(0.01)
         return self
 

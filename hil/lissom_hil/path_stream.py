@@ -10,7 +10,10 @@ Flow control, as a careful master does it:
   - an SDO abort 0x06090031 (sequence gap) means the node did not get some earlier block: read the last
     accepted sequence 0x5004 and resend from the one after it;
   - an SDO timeout (the response was lost) means "send the same block again": if the node had stored it, the
-    repeat is acknowledged as a duplicate and not applied twice.
+    repeat is acknowledged as a duplicate and not applied twice; so does a transfer broken at the SDO protocol
+    level (a toggle error 0x05030000, a server time-out 0x05040000, an out-of-sequence command 0x05040001, or an
+    unexpected answer: what a lost, duplicated or reordered frame of the transfer gives);
+  - a read of 0x5003 / 0x5004 that fails the same way is read again.
 """
 import struct
 import time
@@ -22,6 +25,9 @@ ABORT_FULL = 0x08000020
 ABORT_STATE = 0x08000022
 ABORT_SDO_TIMEOUT = 0x05040000  # the server timed the transfer out
 ABORT_SDO_COMMAND = 0x05040001  # the server took a segment for something else (the transfer is gone)
+# SDO protocol aborts: the transfer broke (a frame lost, repeated or out of order), not the block
+PROTOCOL_ABORTS = (0x05030000, 0x05040000, 0x05040001)
+READ_RETRIES = 20
 
 
 def encode_block(seq, blk, counts_per_mm, tol_mm=0.01, origin=None):
@@ -52,18 +58,30 @@ class PathStreamer:
         self.free_slots = free_slots
         self.log = log if log is not None else []
         self.sent = 0
-        self.retries = {"full": 0, "gap": 0, "timeout": 0, "aborted": 0}
+        self.retries = {"full": 0, "gap": 0, "timeout": 0, "protocol": 0, "aborted": 0}
         self.waits = 0  # times no free slot was reported (flow control held the stream)
 
+    def _read(self, index):
+        for k in range(READ_RETRIES):
+            try:
+                return self.node.sdo[index].raw
+            except canopen.SdoCommunicationError:
+                self.retries["timeout"] += 1
+            except canopen.SdoAbortedError as e:
+                if e.code not in PROTOCOL_ABORTS or k == READ_RETRIES - 1:
+                    raise
+                self.retries["protocol"] += 1
+        raise TimeoutError("reading 0x%04X failed %d times" % (index, READ_RETRIES))
+
     def last_accepted(self):
-        return self.node.sdo[0x5004].raw
+        return self._read(0x5004)
 
     def _free(self):
         if self.free_slots is not None:
             v = self.free_slots()
             if v is not None:
                 return v
-        return self.node.sdo[0x5003].raw
+        return self._read(0x5003)
 
     def write_raw(self, data):
         """One 0x5010 download. Returns 0 or the abort code; raises on other SDO errors."""
@@ -114,6 +132,9 @@ class PathStreamer:
                 self.log.append(("ok", first_seq + i))
                 i += 1
                 waited_full = False
+            elif code in PROTOCOL_ABORTS:
+                self.retries["protocol"] += 1
+                self.log.append(("protocol", first_seq + i, code))
             elif code == ABORT_FULL:
                 self.retries["full"] += 1
                 waited_full = False

@@ -60,6 +60,7 @@ BUILTIN_LIMITS = {"v": 250.0, "a": 3000.0, "j": 60000.0, "snap": 1.18e7}
 class RigConfig:
     kind: str = "vcan"                 # vcan | can0 | mcu
     iface: Optional[str] = None        # default vcan0 / can0
+    node_iface: Optional[str] = None   # local node's interface when it differs (behind lissom_hil.bridge)
     node_id: int = 1
     local: Optional[bool] = None       # start lissom-node (default: True on vcan, False on can0)
     machine: Optional[str] = None      # machine file for the local node (limits for the checks)
@@ -225,7 +226,8 @@ class Rig:
                 args += ["--machine", self.cfg.machine]
             if "--axes" not in args and not self.cfg.machine:
                 args += ["--axes", str(self.cfg.axes)]
-            self.proc = node_proc.NodeProcess(node_proc.find_node_binary(), self.cfg.iface, self.cfg.node_id,
+            self.proc = node_proc.NodeProcess(node_proc.find_node_binary(), self.cfg.node_iface or self.cfg.iface,
+                                              self.cfg.node_id,
                                               trace=self.trace_path, extra=args, log_path=self.out("node.log"))
             self.proc.start()
         else:
@@ -387,6 +389,23 @@ class Rig:
                 raise TimeoutError("axis %d statusword 0x%04X: waited for &0x%04X == 0x%04X" % (axis, sw, mask, value))
             time.sleep(poll)
 
+    def wait_until(self, cond, timeout, what, poll=0.01):
+        """Polls cond() until it is true (the event); fails with `what` after timeout seconds. The timeouts of the
+        suite are bounds for a loaded machine, never delays: a test waits only as long as the event takes."""
+        t_end = time.monotonic() + timeout
+        while True:
+            v = cond()
+            if v:
+                return v
+            if time.monotonic() > t_end:
+                raise TimeoutError("%s (waited %.1f s)" % (what, timeout))
+            time.sleep(poll)
+
+    def wait_moving(self, axis, counts, timeout=5.0):
+        """Waits until the position demand of axis is more than `counts` from home (a move is well under way)."""
+        return self.wait_until(lambda: abs(self.demand(axis)) > counts, timeout,
+                               "axis %d: demand did not pass %d counts" % (axis, counts), poll=0.005)
+
     def enable(self, axis=0, mode="PROFILED POSITION"):
         """Brings the axis to OPERATION ENABLED in `mode`. Axis 0 goes through canopen's BaseNode402 (its PDO
         configuration read from the node, op_mode, the state machine); the other axes have no PDOs of their
@@ -514,10 +533,19 @@ class Rig:
             self._hb = None
 
     # ---- the node's trace (local only) ------------------------------------------------------------------
-    def trace(self, settle_s=0.15):
+    def trace(self, settle_s=0.15, timeout=10.0):
+        """The node's trace so far. The daemon writes it every 64 cycles: while it runs, this waits for two more
+        writes (the file grows twice: every cycle up to the call is then in it), an event rather than a delay,
+        so a late node under load only makes the wait longer. settle_s=0: what the file holds now."""
         if not self.trace_path:
             raise RuntimeError("no trace: the node is not local, or was started without one")
-        time.sleep(settle_s)  # the daemon flushes every 64 cycles
+        running = self.proc is not None and self.proc.proc is not None and self.proc.proc.poll() is None
+        if settle_s > 0 and running and os.path.exists(self.trace_path):
+            size = os.path.getsize(self.trace_path)
+            for _ in range(2):
+                self.wait_until(lambda: os.path.getsize(self.trace_path) > size, timeout,
+                                "the node's trace did not grow", poll=0.01)
+                size = os.path.getsize(self.trace_path)
         return Trace(self.trace_path)
 
     def save_plots(self, csv_path, prefix):

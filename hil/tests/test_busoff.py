@@ -33,7 +33,7 @@ def test_busoff(rig):
     _error_frame(rig, CAN_ERR_CRTL, bytes([0, CAN_ERR_CRTL_ACTIVE, 0, 0, 0, 0, 0, 0]))
 
     rig.pp_move(0, 250.0, wait=False)
-    time.sleep(0.4)
+    rig.wait_moving(0, 20000)  # 20 mm under way
     m = rig.frames.mark()
     _error_frame(rig, CAN_ERR_BUSOFF)
     t_err = rig.frames.wait(lambda f: f.err, 1.0, m).t

@@ -37,7 +37,7 @@ def test_estop(rig):
         _wait(lambda: chip.value(ENABLE) == 1, 1.0, "drive enable not set in OPERATION ENABLED")
         _wait(lambda: chip.value(INPOS) == 1, 1.0, "in position not set at rest")
         rig.pp_move(0, 300.0, wait=False)
-        time.sleep(0.4)
+        rig.wait_moving(0, 20000)  # 20 mm under way
         assert chip.value(INPOS) == 0, "in position while moving"
         m = rig.frames.mark()
         chip.pull(ESTOP, "pull-up")  # E-stop pressed (or the wire broken)

@@ -20,11 +20,12 @@ def test_heartbeat_loss(rig):
     rig.operational()
     rig.enable(0, "PROFILED POSITION")
     rig.set_profile(0, v=80.0, a=800.0, snap=3e6, profile_type=1, j=30000.0, quick_decel=QS["quick_decel"])
-    time.sleep(0.3)
+    # the consumer has seen several heartbeats (an event: counted on the bus, not waited for by the clock)
+    assert rig.frames.wait_count(lambda f: f.id == 0x700 + MASTER_ID, 8, 5.0, m0), "master heartbeats not produced"
     m = rig.frames.mark()
     assert not rig.frames.emcy(nid, m0), "EMCY while the master's heartbeat runs"
     rig.pp_move(0, 200.0, wait=False)
-    time.sleep(0.5)
+    rig.wait_moving(0, 20000)  # 20 mm under way
     c = rig.clock_start()
     rig.stop_heartbeat()
     t_stop = time.monotonic()

@@ -206,7 +206,7 @@ def test_path_hold(rig):
     b1, b2, b3 = read_gcode("G21 G90\nG1 X60 Y30 F2400\nG1 X0 Y30\nG1 X0 Y0\n")
     rig.write(0x5000, 1)
     assert streamer.send(1, b1) == 0
-    time.sleep(0.5)
+    rig.wait_moving(0, 10000)  # 10 mm along the first block
     rig.write(0x5000, 2)  # hold
     t_end = time.monotonic() + 3
     while rig.read(0x5002) != 3 and time.monotonic() < t_end:  # HELD
@@ -224,7 +224,7 @@ def test_path_hold(rig):
     # clear while moving: quick stop on the path, buffer flushed, state IDLE
     rig.write(0x5001, 100)
     assert streamer.send(3, b3) == 0
-    time.sleep(0.3)
+    rig.wait_until(lambda: rig.read(0x5005) == 3 and rig.demand(1) < 25000, 5.0, "block 3 not under way")
     rig.write(0x5000, 4)
     t_end = time.monotonic() + 3
     while rig.read(0x5002) != 0 and time.monotonic() < t_end:

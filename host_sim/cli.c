@@ -233,7 +233,8 @@ int cli_plot(const char *args)
     char cmd[16384];
     int w;
     if (pypath[0])
-        w = snprintf(cmd, sizeof cmd, "PYTHONPATH='%s'${PYTHONPATH:+:$PYTHONPATH} '%s' -m lissom_hil.plot %s", pypath, py, args);
+        w = snprintf(cmd, sizeof cmd, "PYTHONPATH='%s'${PYTHONPATH:+:$PYTHONPATH} '%s' -m lissom_hil.plot %s", pypath,
+                     py, args);
     else
         w = snprintf(cmd, sizeof cmd, "'%s' -m lissom_hil.plot %s", py, args);
     if (w >= (int)sizeof cmd)
@@ -320,7 +321,9 @@ int cli_check_sample_rows(const char *name, double rows, double cycle_s)
 {
     if (rows <= (double)CLI_SAMPLES_MAX_ROWS)
         return 0;
-    fprintf(stderr, "error: --%s: the profile has %.0f cycles of %g s, more than the %u rows --%s writes at most; "
-                    "use a longer --cycle\n", name, rows, cycle_s, CLI_SAMPLES_MAX_ROWS, name);
+    fprintf(stderr,
+            "error: --%s: the profile has %.0f cycles of %g s, more than the %u rows --%s writes at most; "
+            "use a longer --cycle\n",
+            name, rows, cycle_s, CLI_SAMPLES_MAX_ROWS, name);
     return -1;
 }

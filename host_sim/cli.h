@@ -40,13 +40,13 @@ int cli_parse_number(const char *s, double *out);
  * The sane ranges of lissom-sim's options (docs/host_sim.md, "Option ranges"). Units are any consistent set
  * (mm and s by convention); the bounds are wide enough for m or mm, and narrow enough that every quantity the
  * firmware derives from them (durations, cycle counts, distances) stays finite in float and in double. */
-#define CLI_CYCLE_MAX_S 0.1     /* the machine-file bound: a 100 ms cycle is already far slower than any drive */
-#define CLI_LIMIT_MIN 1e-6      /* below this a limit is a typo (or a unit mix-up), and durations overflow */
-#define CLI_VEL_MAX 1e6         /* mm/s: 1 km/s */
-#define CLI_ACC_MAX 1e9         /* mm/s^2: 1e5 g */
-#define CLI_JERK_MAX 1e12       /* mm/s^3 */
-#define CLI_SNAP_MAX 1e15       /* mm/s^4 */
-#define CLI_DISTANCE_MAX 1e7    /* mm: 10 km, |distance| */
+#define CLI_CYCLE_MAX_S 0.1           /* the machine-file bound: a 100 ms cycle is already far slower than any drive */
+#define CLI_LIMIT_MIN 1e-6            /* below this a limit is a typo (or a unit mix-up), and durations overflow */
+#define CLI_VEL_MAX 1e6               /* mm/s: 1 km/s */
+#define CLI_ACC_MAX 1e9               /* mm/s^2: 1e5 g */
+#define CLI_JERK_MAX 1e12             /* mm/s^3 */
+#define CLI_SNAP_MAX 1e15             /* mm/s^4 */
+#define CLI_DISTANCE_MAX 1e7          /* mm: 10 km, |distance| */
 #define CLI_SAMPLES_MAX_ROWS 2000000u /* --samples: rows (cycles) written at most, about 100 MB of CSV */
 
 /* v in [lo, hi] (finite). Otherwise prints "error: --NAME VALUE is out of range: ..." and returns -1. */

@@ -109,10 +109,10 @@ int cmd_bench(int argc, char **argv)
     const bool json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "bench"))
         return 2;
-    const double r[] = {bench_scurve(budget), bench_move(1, budget), bench_move(3, budget),
+    const double r[] = {bench_scurve(budget),   bench_move(1, budget),  bench_move(3, budget),
                         bench_cycle(1, budget), bench_cycle(3, budget), bench_cycle(6, budget)};
     const char *k[] = {"ns_per_scurve_plan", "ns_per_move_plan_1axis", "ns_per_move_plan_3axes",
-                       "ns_per_cycle_1axis", "ns_per_cycle_3axes", "ns_per_cycle_6axes"};
+                       "ns_per_cycle_1axis", "ns_per_cycle_3axes",     "ns_per_cycle_6axes"};
     if (json) {
         printf("{\"real\":\"%s\"", LSM_REAL_IS_FLOAT ? "float" : "double");
         for (int i = 0; i < 6; i++)

@@ -37,7 +37,10 @@ static double bc_rand(void) /* xorshift64*, uniform in [0, 1) */
     g_rng ^= g_rng >> 27;
     return (double)((g_rng * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
 }
-static double bc_uni(double a, double b) { return a + (b - a) * bc_rand(); }
+static double bc_uni(double a, double b)
+{
+    return a + (b - a) * bc_rand();
+}
 
 /* An arc in G17 that starts (or ends) at V with unit tangent t there, radius r, turning `turn` rad
  * (signed: > 0 counter-clockwise). */
@@ -68,11 +71,15 @@ static void bc_make(bc_corner *k, int kind)
     if (kind == 0) {
         /* 3-D: tilt the second direction out of the plane */
         const double tz = bc_uni(-0.5, 0.5);
-        const lsm_real p0[6] = {(lsm_real)(V[0] - l1 * t1[0]), (lsm_real)(V[1] - l1 * t1[1]),
-                                (lsm_real)(V[2] - l1 * bc_uni(-0.5, 0.5)), 0, 0, 0};
+        const lsm_real p0[6] = {(lsm_real)(V[0] - l1 * t1[0]),
+                                (lsm_real)(V[1] - l1 * t1[1]),
+                                (lsm_real)(V[2] - l1 * bc_uni(-0.5, 0.5)),
+                                0,
+                                0,
+                                0};
         const lsm_real pv[6] = {(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2], 0, 0, 0};
-        const lsm_real p2[6] = {(lsm_real)(V[0] + l2 * t2[0]), (lsm_real)(V[1] + l2 * t2[1]), (lsm_real)(V[2] + l2 * tz),
-                                0, 0, 0};
+        const lsm_real p2[6] =
+            {(lsm_real)(V[0] + l2 * t2[0]), (lsm_real)(V[1] + l2 * t2[1]), (lsm_real)(V[2] + l2 * tz), 0, 0, 0};
         lsm_geom_line_init(&k->b1, p0, pv);
         lsm_geom_line_init(&k->b2, pv, p2);
         return;
@@ -84,8 +91,8 @@ static void bc_make(bc_corner *k, int kind)
         bc_arc(&k->b1, V, t1, r1, turn1, 1);
     else
         lsm_geom_line_init(&k->b1,
-                           (lsm_real[6]){(lsm_real)(V[0] - l1 * t1[0]), (lsm_real)(V[1] - l1 * t1[1]), (lsm_real)V[2], 0,
-                                         0, 0},
+                           (lsm_real[6]){(lsm_real)(V[0] - l1 * t1[0]), (lsm_real)(V[1] - l1 * t1[1]), (lsm_real)V[2],
+                                         0, 0, 0},
                            (lsm_real[6]){(lsm_real)V[0], (lsm_real)V[1], (lsm_real)V[2], 0, 0, 0});
     if (kind == 1 || kind == 3)
         bc_arc(&k->b2, V, t2, r2, turn2, 0);

@@ -50,8 +50,8 @@ typedef struct bp_row {
     double rv[2], ra[2], rj[2]; /* largest axis v/a/j over its limit */
     double ns_block, ns_cycle;  /* lissom planner / interpolator */
     double vpop_ns_cycle, vpop_s;
-    double ns_piece;            /* lissom: background piece planning (lsm_interp_prepare) per piece */
-    double isj_max, isj_p99;    /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
+    double ns_piece;         /* lissom: background piece planning (lsm_interp_prepare) per piece */
+    double isj_max, isj_p99; /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
 } bp_row;
 
 static double bp_now(void)
@@ -328,7 +328,8 @@ int cmd_bench_planner(int argc, char **argv)
             printf("%-16s %9s %9.3f %6s  %17s  %5.3f/%5.3f/%5.3f  %11s  %9s %9s %10s %9.3f\n", r->name, "-", r->dur[1],
                    "-", "-", r->rv[1], r->ra[1], r->rj[1], isj, "-", "-", "-", r->vpop_s);
     }
-    printf("\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
-           "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n");
+    printf(
+        "\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
+        "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n");
     return 0;
 }

@@ -35,7 +35,7 @@ typedef struct {
 typedef struct {
     check_msg *v;
     size_t n, cap, n_err, n_warn;
-    FILE *blocks;     /* --blocks --json: a temporary file holding the blocks' JSON */
+    FILE *blocks; /* --blocks --json: a temporary file holding the blocks' JSON */
     FILE *events;
     size_t n_blocks, n_events;
 } check_list;
@@ -118,8 +118,9 @@ static void put_block(check_list *l, const lsm_gcode_block *b)
 static void put_event(check_list *l, const lsm_gcode_event *e, size_t before)
 {
     FILE *f = l->events;
-    fprintf(f, "%s\n    {\"line\": %u, \"event\": \"%s\", \"code\": \"%s\", \"before_block\": %zu, \"exact_stop\": %s, "
-               "\"tool\": %d, \"value\": ",
+    fprintf(f,
+            "%s\n    {\"line\": %u, \"event\": \"%s\", \"code\": \"%s\", \"before_block\": %zu, \"exact_stop\": %s, "
+            "\"tool\": %d, \"value\": ",
             l->n_events ? "," : "", (unsigned)e->line, lsm_gcode_event_name(e->kind), lsm_gcode_event_code(e->kind),
             before, e->exact_stop ? "true" : "false", (int)e->tool);
     json_num(f, e->value);
@@ -206,7 +207,8 @@ static int check_text(const char *text, size_t len, const lsm_gcode_options *go,
     }
     if (!ended)
         add_msg(l, 0, (int)g.line_no, 0,
-                percent ? "the program opens with % but does not close with %" : "the program has no end (M2, M30 or %)");
+                percent ? "the program opens with % but does not close with %"
+                        : "the program has no end (M2, M30 or %)");
     return 0;
 }
 

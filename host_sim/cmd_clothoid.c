@@ -106,9 +106,14 @@ static int clothoid_fit(cli_args *a)
         const struct {
             const char *k;
             double v;
-        } f[] = {{"c", r.c_per_mm2},       {"s", r.s_mm},           {"x", r.end.x_mm},
-                 {"y", r.end.y_mm},        {"theta", r.end.theta_rad}, {"kappa", r.end.kappa_per_mm},
-                 {"residual_mm", r.residual_mm}, {"residual_rad", r.residual_rad}};
+        } f[] = {{"c", r.c_per_mm2},
+                 {"s", r.s_mm},
+                 {"x", r.end.x_mm},
+                 {"y", r.end.y_mm},
+                 {"theta", r.end.theta_rad},
+                 {"kappa", r.end.kappa_per_mm},
+                 {"residual_mm", r.residual_mm},
+                 {"residual_rad", r.residual_rad}};
         printf("{");
         for (size_t i = 0; i < sizeof f / sizeof f[0]; i++) {
             printf("%s\"%s\": ", i ? ", " : "", f[i].k);
@@ -170,8 +175,8 @@ static int g2_read(const char *path, lsm_geom **out, int *n_out, lsm_geom_plane 
                 gs = lsm_geom_line_init(&g[n], b->start, b->end);
             }
             if (gs != LSM_OK) {
-                fprintf(stderr, "error: clothoid g2path: %s:%u: %s (%d)\n", path, (unsigned)b->line,
-                        lsm_status_str(gs), (int)gs);
+                fprintf(stderr, "error: clothoid g2path: %s:%u: %s (%d)\n", path, (unsigned)b->line, lsm_status_str(gs),
+                        (int)gs);
                 rc = -1;
                 break;
             }
@@ -260,8 +265,8 @@ static int clothoid_g2path(cli_args *a)
             printf(", \"clothoids\": [");
             for (int i = 0; i < r.n_segments; i++) {
                 const lsm_clothoid *q = &out[i];
-                printf("%s[%.17g, %.17g, %.17g, %.17g, %.17g, %.17g]", i ? ", " : "", q->x0_mm, q->y0_mm,
-                       q->theta0_rad, q->kappa0_per_mm, q->c_per_mm2, q->len_mm);
+                printf("%s[%.17g, %.17g, %.17g, %.17g, %.17g, %.17g]", i ? ", " : "", q->x0_mm, q->y0_mm, q->theta0_rad,
+                       q->kappa0_per_mm, q->c_per_mm2, q->len_mm);
             }
             printf("]");
         }
@@ -273,8 +278,8 @@ static int clothoid_g2path(cli_args *a)
                60.0 * r.feed_acc_mm_s, 60.0 * r.feed_jerk_mm_s);
         if (list)
             for (int i = 0; i < r.n_segments; i++)
-                printf("  %3d  x0 %.6f y0 %.6f theta0 %.6f kappa0 %.6f c %.6g s %.6f\n", i, out[i].x0_mm,
-                       out[i].y0_mm, out[i].theta0_rad, out[i].kappa0_per_mm, out[i].c_per_mm2, out[i].len_mm);
+                printf("  %3d  x0 %.6f y0 %.6f theta0 %.6f kappa0 %.6f c %.6g s %.6f\n", i, out[i].x0_mm, out[i].y0_mm,
+                       out[i].theta0_rad, out[i].kappa0_per_mm, out[i].c_per_mm2, out[i].len_mm);
     }
     free(c);
     free(out);

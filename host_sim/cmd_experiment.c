@@ -68,9 +68,9 @@
 
 #define CYCLE_S 0.001
 /* Kombarov et al. 2019, Table 1 (Test 1 and Test 2 differ only in the snap limit DJ_max) */
-#define K_V_MAX_MM_S 220.0          /* feed change 13.2 m/min */
-#define K_A_MAX_MM_S2 1570.0        /* 1.57 m/s^2 */
-#define K_J_MAX_MM_S3 16000.0       /* 16 m/s^3 */
+#define K_V_MAX_MM_S 220.0            /* feed change 13.2 m/min */
+#define K_A_MAX_MM_S2 1570.0          /* 1.57 m/s^2 */
+#define K_J_MAX_MM_S3 16000.0         /* 16 m/s^3 */
 #define K_SNAP_TEST1_MM_S4 25132000.0 /* 25132 m/s^4: T1 = pi J / (2 DJ) = 1 ms, one cycle: constant jerk */
 #define K_SNAP_TEST2_MM_S4 560000.0   /* 560 m/s^4: T1 = 45 ms, the sin^2 profile */
 #define MAX_CYCLES 20000
@@ -80,8 +80,8 @@
 
 /* ---- a time-optimal rest-to-rest constant-jerk profile (7 segments, continuous time) ---- */
 typedef struct cjerk {
-    double t[7];  /* segment durations */
-    double j[7];  /* jerk per segment */
+    double t[7]; /* segment durations */
+    double j[7]; /* jerk per segment */
     double D;
 } cjerk;
 
@@ -392,11 +392,16 @@ static void print_profiles_json(const profile *pr, const result *r)
         const struct {
             const char *k;
             double v;
-        } f[] = {{"motion_max_following_error", x->motion_max}, {"motion_rms_following_error", x->motion_rms},
-                 {"residual_max_error", x->resid_max},          {"residual_rms_error", x->resid_rms},
-                 {"settle_time", x->settle_s},                  {"max_motor_following_error", x->motor_max},
-                 {"max_deflection", x->defl_max},               {"max_dynamic_deflection", x->defl_dyn_max},
-                 {"spectral_residual_resonance", x->spec_res},  {"spectral_residual_antiresonance", x->spec_antires}};
+        } f[] = {{"motion_max_following_error", x->motion_max},
+                 {"motion_rms_following_error", x->motion_rms},
+                 {"residual_max_error", x->resid_max},
+                 {"residual_rms_error", x->resid_rms},
+                 {"settle_time", x->settle_s},
+                 {"max_motor_following_error", x->motor_max},
+                 {"max_deflection", x->defl_max},
+                 {"max_dynamic_deflection", x->defl_dyn_max},
+                 {"spectral_residual_resonance", x->spec_res},
+                 {"spectral_residual_antiresonance", x->spec_antires}};
         for (size_t j = 0; j < sizeof f / sizeof f[0]; j++) {
             printf(",\"%s\":", f[j].k);
             json_num(stdout, f[j].v);
@@ -694,16 +699,16 @@ static void exp_single_text(const exp_opts *o, const config *cfg)
 /* One run on one drive: the summary, and the setpoints and errors to --out. */
 static int exp_single(const exp_opts *o, config *cfg)
 {
-    apply(&cfg->dp, o->nf ? o->fr[0] : DNAN, o->nz ? o->zr[0] : DNAN, o->nb ? o->bw[0] : DNAN,
-          o->nk ? o->kv[0] : DNAN);
+    apply(&cfg->dp, o->nf ? o->fr[0] : DNAN, o->nz ? o->zr[0] : DNAN, o->nb ? o->bw[0] : DNAN, o->nk ? o->kv[0] : DNAN);
     const int c = check_drive(&cfg->dp);
     if (c < 0)
         return 2;
     if (c > 0) {
         sim_drive_modes md;
         sim_drive_modes_analytic(&cfg->dp, &md);
-        fprintf(stderr, "error: the drive does not settle in a closed-loop step test (resonance %.1f Hz, velocity "
-                        "loop %.1f Hz, kv %g /s): lower --vel-bw-hz or --kv, or raise --resonance-hz\n",
+        fprintf(stderr,
+                "error: the drive does not settle in a closed-loop step test (resonance %.1f Hz, velocity "
+                "loop %.1f Hz, kv %g /s): lower --vel-bw-hz or --kv, or raise --resonance-hz\n",
                 md.f_res_hz, vel_bw_hz(&cfg->dp), cfg->dp.kv_1_s);
         return 1;
     }
@@ -757,8 +762,8 @@ static void exp_sweep_row(const exp_opts *o, const config *c, double f_r, double
     fmt_us(u[0], 32, t->resid_max);
     fmt_us(u[1], 32, s->resid_max);
     printf("  %6.1f %5.3f %6.1f %5.1f | %8.3f %8.3f | %7s %7s %7s %7s %7s | %8s %8s%s%s\n", f_r, zeta,
-           vel_bw_hz(&c->dp), c->dp.kv_1_s, 1e3 * t->max_fe, 1e3 * s->max_fe, r[0], r[1], r[2], r[3], r[4], u[0],
-           u[1], (t->limited || s->limited) ? " current limit" : "", stable ? "" : " step test fails");
+           vel_bw_hz(&c->dp), c->dp.kv_1_s, 1e3 * t->max_fe, 1e3 * s->max_fe, r[0], r[1], r[2], r[3], r[4], u[0], u[1],
+           (t->limited || s->limited) ? " current limit" : "", stable ? "" : " step test fails");
 }
 
 /* The sweep over resonance, damping, velocity loop and kv (defaults: a grid of resonances and dampings). */
@@ -816,7 +821,8 @@ int cmd_experiment(int argc, char **argv)
 {
     if (argc < 1 || strcmp(argv[0], "kombarov") != 0) {
         fprintf(stderr, "error: usage: lissom-sim experiment kombarov [--distance MM] [--machine FILE [--axis X]] "
-                        "[--vff GAIN] [--aff GAIN] [--no-ff] [--feedback load|motor] [--resonance-hz HZ] [--damping ZETA] [--vel-bw-hz HZ] [--coulomb N] "
+                        "[--vff GAIN] [--aff GAIN] [--no-ff] [--feedback load|motor] [--resonance-hz HZ] [--damping "
+                        "ZETA] [--vel-bw-hz HZ] [--coulomb N] "
                         "[--kv 1/S] [--band MM] [--settle-window S] [--sweep] [--out DIR] [--json]\n");
         return 2;
     }

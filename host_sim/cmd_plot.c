@@ -40,7 +40,8 @@ int cmd_plot(int argc, char **argv)
     }
     char csv[4096];
     struct stat st;
-    if (snprintf(csv, sizeof csv, "%s/run.csv", dir) >= (int)sizeof csv || stat(csv, &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (snprintf(csv, sizeof csv, "%s/run.csv", dir) >= (int)sizeof csv || stat(csv, &st) != 0 ||
+        !S_ISREG(st.st_mode)) {
         fprintf(stderr, "error: %s/run.csv not found (write it with lissom-sim run ... --out %s)\n", dir, dir);
         return 1;
     }

@@ -122,9 +122,10 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         json_num(f, r->intersample_jerk_p99);
         fprintf(f, "},\n");
     }
-    fprintf(f, "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "
-               "\"pieces\": %u, \"replans\": %u, \"fallbacks\": %u, \"plan_errors\": %u, \"ramp_checks\": %u, "
-               "\"block_bytes\": %u, \"append_ns_per_block\": ",
+    fprintf(f,
+            "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "
+            "\"pieces\": %u, \"replans\": %u, \"fallbacks\": %u, \"plan_errors\": %u, \"ramp_checks\": %u, "
+            "\"block_bytes\": %u, \"append_ns_per_block\": ",
             r->stats.appended, r->stats.corners, r->stats.corner_stops, r->stats.pieces, r->replans,
             r->stats.plan_fallbacks, r->plan_errors, r->stats.checks, r->pl_block_bytes);
     json_num(f, r->plan_ns_per_block);
@@ -331,8 +332,10 @@ int cmd_run(int argc, char **argv)
         const int prc = plot_run(out, machine);
         sim_progress_finish(&prog);
         if (prc != 0) {
-            fprintf(stderr, "error: --plots: plotting failed (python -m lissom_hil.plot, status %d; see docs/host_sim.md: "
-                            "the plotter needs Python 3 with lissom_hil, numpy and matplotlib)\n", prc);
+            fprintf(stderr,
+                    "error: --plots: plotting failed (python -m lissom_hil.plot, status %d; see docs/host_sim.md: "
+                    "the plotter needs Python 3 with lissom_hil, numpy and matplotlib)\n",
+                    prc);
             rc = 1;
         }
     }

@@ -64,10 +64,21 @@ int cmd_scurve(int argc, char **argv)
         const char *k;
         double v;
     } f[] = {
-        {"dt1", sc.iv.n1_cycles * dt}, {"dt2", sc.iv.n2_cycles * dt}, {"dt4", sc.iv.n4_cycles * dt},
-        {"tp", lsm_scurve_duration_s(&sc)}, {"dt1j", inf.dt1j_s}, {"dt1a", inf.dt1a_s}, {"dt1f", inf.dt1f_s},
-        {"dt2a", inf.dt2a_s}, {"dt2f", inf.dt2f_s}, {"dt4f", inf.dt4f_s}, {"jp_initial", inf.jp_initial_mm_s3},
-        {"jp", jp}, {"ap", inf.ap_mm_s2}, {"ap_final", inf.ap_final_mm_s2}, {"snap_final", inf.snap_final_mm_s4},
+        {"dt1", sc.iv.n1_cycles * dt},
+        {"dt2", sc.iv.n2_cycles * dt},
+        {"dt4", sc.iv.n4_cycles * dt},
+        {"tp", lsm_scurve_duration_s(&sc)},
+        {"dt1j", inf.dt1j_s},
+        {"dt1a", inf.dt1a_s},
+        {"dt1f", inf.dt1f_s},
+        {"dt2a", inf.dt2a_s},
+        {"dt2f", inf.dt2f_s},
+        {"dt4f", inf.dt4f_s},
+        {"jp_initial", inf.jp_initial_mm_s3},
+        {"jp", jp},
+        {"ap", inf.ap_mm_s2},
+        {"ap_final", inf.ap_final_mm_s2},
+        {"snap_final", inf.snap_final_mm_s4},
         {"distance", lsm_scurve_distance_mm(&sc)},
     };
     if (json) {

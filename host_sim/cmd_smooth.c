@@ -36,13 +36,13 @@
 typedef struct {
     lsm_geom g;
     uint32_t line;
-    int feed;      /* G1/G2/G3 (not a rapid) */
-    int stop_end;  /* G61 in force: stop at the end of this block */
-    int rotary;    /* an arc that moves A B C (its geometry ignores them) */
+    int feed;     /* G1/G2/G3 (not a rapid) */
+    int stop_end; /* G61 in force: stop at the end of this block */
+    int rotary;   /* an arc that moves A B C (its geometry ignores them) */
 } sm_block;
 
 typedef struct {
-    int status;            /* 0 smoothed, 1 joined, 2 stop */
+    int status; /* 0 smoothed, 1 joined, 2 stop */
     const char *reason;
     lsm_corner_result r;
     double dev_sampled;
@@ -192,7 +192,8 @@ static double sm_dist_block(const lsm_geom *g, const double p[3])
     double best = HUGE_VAL;
     for (int e = 0; e < 2; e++) {
         sm_eval(g, e ? g->len : 0.0, q, NULL, NULL);
-        const double d = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+        const double d =
+            sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
         if (d < best)
             best = d;
     }
@@ -332,8 +333,7 @@ static int sm_parse(int argc, char **argv, sm_opts *o)
     o->path = cli_opt(&a, "gcode");
     o->amax = 50.0;
     o->jmax = 500.0;
-    if (cli_num_req(&a, "tolerance", &o->eps) || cli_num(&a, "amax", &o->amax) < 0 ||
-        cli_num(&a, "jmax", &o->jmax) < 0)
+    if (cli_num_req(&a, "tolerance", &o->eps) || cli_num(&a, "amax", &o->amax) < 0 || cli_num(&a, "jmax", &o->jmax) < 0)
         return 2;
     o->json = cli_flag(&a, "json");
     if (cli_check_unused(&a, "smooth"))
@@ -449,16 +449,16 @@ static void sm_print_corner_json(const sm_opts *o, const sm_corner *k, int i, ui
         sm_num("trim_after", r->trim2_mm, &f);
         sm_num("angle_deg", r->delta_rad * 180.0 / LSM_PI, &f);
         sm_num("feed_limit_eq7_mm_s", r->kappa_max_per_mm > 0 ? sqrt(o->amax / r->kappa_max_per_mm) : HUGE_VAL, &f);
-        sm_num("feed_limit_eq8_mm_s", r->sharpness_max_per_mm2 > 0 ? cbrt(o->jmax / r->sharpness_max_per_mm2) : HUGE_VAL,
-               &f);
+        sm_num("feed_limit_eq8_mm_s",
+               r->sharpness_max_per_mm2 > 0 ? cbrt(o->jmax / r->sharpness_max_per_mm2) : HUGE_VAL, &f);
         printf(", \"iterations\": %u, \"scales\": %u, \"limited\": %s, \"closed_form\": %s", (unsigned)r->iterations,
                (unsigned)r->scales, r->limited ? "true" : "false", r->closed_form ? "true" : "false");
     }
     printf("}");
 }
 
-static void sm_print_json(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t,
-                          double f7, double f8)
+static void sm_print_json(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t, double f7,
+                          double f8)
 {
     int first = 1;
     printf("{");
@@ -486,8 +486,8 @@ static void sm_print_json(const sm_opts *o, const sm_block *b, int n, const sm_c
     printf("}\n");
 }
 
-static void sm_print_text(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t,
-                          double f7, double f8)
+static void sm_print_text(const sm_opts *o, const sm_block *b, int n, const sm_corner *c, const sm_totals *t, double f7,
+                          double f8)
 {
     printf("%d blocks, %d corners: %d smoothed, %d joined, %d stops (tolerance %g mm)\n", n, n > 0 ? n - 1 : 0,
            t->n_smooth, t->n_join, t->n_stop, o->eps);
@@ -504,8 +504,8 @@ static void sm_print_text(const sm_opts *o, const sm_block *b, int n, const sm_c
     printf("max deviation %.6g mm (sampled %.6g), max curvature jump %.3g 1/mm (relative %.3g, at line %u; gap %.3g mm,"
            " tangent %.3g rad)\n",
            t->max_dev, t->max_dev_s, jt->curv, jt->curv_rel, (unsigned)jt->worst_line, jt->gap, jt->tan);
-    printf("kappa_max %.6g 1/mm, c_max %.6g 1/mm^2: feed limits eq 7 %.1f mm/min, eq 8 %.1f mm/min\n", t->kmax,
-           t->cmax, 60.0 * f7, 60.0 * f8);
+    printf("kappa_max %.6g 1/mm, c_max %.6g 1/mm^2: feed limits eq 7 %.1f mm/min, eq 8 %.1f mm/min\n", t->kmax, t->cmax,
+           60.0 * f7, 60.0 * f8);
 }
 
 int cmd_smooth(int argc, char **argv)

@@ -110,8 +110,8 @@ static void on_frame(void *ctx, const co_frame *f)
         s->tpdo2 = true;
         s->path_state = f->data[0];
         s->free_slots = (uint16_t)(f->data[1] | f->data[2] << 8);
-        s->last_acc = (uint32_t)f->data[3] | (uint32_t)f->data[4] << 8 | (uint32_t)f->data[5] << 16 |
-                      (uint32_t)f->data[6] << 24;
+        s->last_acc =
+            (uint32_t)f->data[3] | (uint32_t)f->data[4] << 8 | (uint32_t)f->data[5] << 16 | (uint32_t)f->data[6] << 24;
     } else if (f->id == 0x380 + id && f->len >= 8) {
         for (int k = 0; k < 2 && k < s->n_axes; k++) {
             s->pos[k] = (int32_t)((uint32_t)f->data[4 * k] | (uint32_t)f->data[4 * k + 1] << 8 |
@@ -122,8 +122,8 @@ static void on_frame(void *ctx, const co_frame *f)
         s->pos[2] = (int32_t)((uint32_t)f->data[0] | (uint32_t)f->data[1] << 8 | (uint32_t)f->data[2] << 16 |
                               (uint32_t)f->data[3] << 24);
         s->pos_seen[2] = true;
-        s->active_seq = (uint32_t)f->data[4] | (uint32_t)f->data[5] << 8 | (uint32_t)f->data[6] << 16 |
-                        (uint32_t)f->data[7] << 24;
+        s->active_seq =
+            (uint32_t)f->data[4] | (uint32_t)f->data[5] << 8 | (uint32_t)f->data[6] << 16 | (uint32_t)f->data[7] << 24;
     } else if (f->id == 0x80 + id && f->len == 8) {
         const uint16_t code = (uint16_t)(f->data[0] | f->data[1] << 8);
         const bool info = code == 0x0000 || code == 0x8110 || code == 0x8120 || code == 0x8140 || code == 0x8210 ||
@@ -374,11 +374,11 @@ static int path_command(stream *s, uint8_t cmd, const char *what)
 /* ---------------------------------------------------------------------------------------------------------- */
 
 typedef struct run_state {
-    size_t next;          /* next block to send */
-    uint32_t seq0;        /* sequence of block 0 */
-    size_t ei;            /* next event */
+    size_t next;   /* next block to send */
+    uint32_t seq0; /* sequence of block 0 */
+    size_t ei;     /* next event */
     bool started, held;
-    int free_est;         /* free slots as this master counts them */
+    int free_est; /* free slots as this master counts them */
     double t_sync, t_progress, t0, t_check;
     int sync_ms;
     bool progress, tty_in, yes;
@@ -503,8 +503,8 @@ static int send_next(stream *s, run_state *st)
     int64_t r = co_sdo_write(&s->m, 0x5010, 0, b->data, b->len);
     /* the node's SDO server gave up between segments (0x05040000, a loaded host), or the transfer was garbled: the
      * block was not stored (whole or nothing), send it again */
-    for (int k = 0; k < ST_BLOCK_RETRIES && (r == 0x05040000 || r == 0x05030000 || r == 0x05040001 ||
-                                             r == CO_SDO_PROTOCOL); k++)
+    for (int k = 0;
+         k < ST_BLOCK_RETRIES && (r == 0x05040000 || r == 0x05030000 || r == 0x05040001 || r == CO_SDO_PROTOCOL); k++)
         r = co_sdo_write(&s->m, 0x5010, 0, b->data, b->len);
     if (r == 0) {
         st->next++;
@@ -516,7 +516,7 @@ static int send_next(stream *s, run_state *st)
         return 0;
     }
     if (r == CO_SDO_TIMEOUT)
-        return 0; /* the same block again: a duplicate is acknowledged, not stored twice */
+        return 0;          /* the same block again: a duplicate is acknowledged, not stored twice */
     if (r == 0x06090031) { /* gap: resend from the node's last accepted + 1 */
         uint32_t last;
         int64_t r2 = sdo_read(s, 0x5004, 0, &last);
@@ -560,10 +560,12 @@ static int run_event(stream *s, run_state *st, const lsm_gcode_event *e)
         return wait_serving(s, st, (double)e->value);
     if (k == LSM_GCODE_EV_PAUSE || k == LSM_GCODE_EV_OPTIONAL_PAUSE) {
         if (!st->tty_in || st->yes) {
-            printf("line %u: resumed (no operator: %s)\n", (unsigned)e->line, st->yes ? "--yes" : "stdin is not a terminal");
+            printf("line %u: resumed (no operator: %s)\n", (unsigned)e->line,
+                   st->yes ? "--yes" : "stdin is not a terminal");
             return 0;
         }
-        fprintf(stderr, "\nprogram paused at line %u (%s): Enter resumes\n", (unsigned)e->line, lsm_gcode_event_code(k));
+        fprintf(stderr, "\nprogram paused at line %u (%s): Enter resumes\n", (unsigned)e->line,
+                lsm_gcode_event_code(k));
         st->held = true;
         while (st->held) {
             int rc = service(s, st);

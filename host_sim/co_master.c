@@ -132,7 +132,10 @@ int co_nmt(co_master *m, uint8_t command)
     return co_send(m, 0x000, d, 2);
 }
 
-int co_sync(co_master *m) { return co_send(m, 0x080, NULL, 0); }
+int co_sync(co_master *m)
+{
+    return co_send(m, 0x080, NULL, 0);
+}
 
 /* Sends an SDO request and waits for the server's answer to (index, sub); other frames go to on_frame. */
 static int64_t sdo_xfer(co_master *m, const uint8_t req[8], uint16_t index, uint8_t sub, bool check_mux,

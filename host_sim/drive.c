@@ -26,18 +26,18 @@ void sim_drive_params_default(sim_drive_params *p, bool rotary)
         p->current_max_A = 8.0;
         p->motor_mass_kg = 15.0;
         p->load_mass_kg = 45.0;
-        p->stiffness_N_m = 4.4e6;   /* resonance ~100 Hz, anti-resonance ~50 Hz */
-        p->damping_N_s_m = 700.0;   /* zeta ~0.05 */
+        p->stiffness_N_m = 4.4e6; /* resonance ~100 Hz, anti-resonance ~50 Hz */
+        p->damping_N_s_m = 700.0; /* zeta ~0.05 */
         p->viscous_N_s_m = 200.0;
         p->coulomb_N = 30.0;
-        p->vel_kp_A_s_m = 80.0;     /* velocity loop crossover ~40 Hz */
+        p->vel_kp_A_s_m = 80.0; /* velocity loop crossover ~40 Hz */
     } else {
         /* servo through a 50:1 gear: Kt 0.6 N m/A, J_rotor 1e-4 kg m^2; table 0.5 kg m^2 */
         p->force_const_N_A = 30.0;
         p->current_max_A = 6.0;
         p->motor_mass_kg = 0.25;
         p->load_mass_kg = 0.5;
-        p->stiffness_N_m = 4.2e4;   /* N m/rad, resonance ~80 Hz */
+        p->stiffness_N_m = 4.2e4; /* N m/rad, resonance ~80 Hz */
         p->damping_N_s_m = 8.4;
         p->viscous_N_s_m = 1.0;
         p->coulomb_N = 5.0;
@@ -232,8 +232,7 @@ lsm_status sim_drive_step_ff(sim_drive *d, double setpoint, double vel_ff, doubl
     const sim_drive_params *p = &d->p;
     const double set_end = setpoint * d->unit_m;
     const double vff = p->vff_gain * vel_ff * d->unit_m;
-    const double iff =
-        p->aff_gain * (p->motor_mass_kg + p->load_mass_kg) * acc_ff * d->unit_m / p->force_const_N_A;
+    const double iff = p->aff_gain * (p->motor_mass_kg + p->load_mass_kg) * acc_ff * d->unit_m / p->force_const_N_A;
     const double start = d->set_m;
     d->set_prev_m = start;
     d->limited = false;

@@ -47,25 +47,25 @@
 #include "status.h"
 
 typedef struct sim_drive_params {
-    bool rotary;                  /* API positions in rad instead of mm (see above) */
+    bool rotary; /* API positions in rad instead of mm (see above) */
     /* position loop, closed on the load position */
-    double kv_1_s;                /* position gain: v_cmd = kv (x_set - x_meas) + vff_gain v_ff [1/s] */
-    double vff_gain;              /* velocity feed-forward gain, 0 (none) .. 1.5 (1 = full) */
-    double aff_gain;              /* acceleration (current) feed-forward gain, 0 (none) .. 1.5 (1 = full) */
+    double kv_1_s;   /* position gain: v_cmd = kv (x_set - x_meas) + vff_gain v_ff [1/s] */
+    double vff_gain; /* velocity feed-forward gain, 0 (none) .. 1.5 (1 = full) */
+    double aff_gain; /* acceleration (current) feed-forward gain, 0 (none) .. 1.5 (1 = full) */
     /* velocity loop, closed on the motor velocity */
-    double vel_kp_A_s_m;          /* proportional gain [A/(m/s)] */
-    double vel_ti_s;              /* integral time [s]; 0 = proportional only */
+    double vel_kp_A_s_m; /* proportional gain [A/(m/s)] */
+    double vel_ti_s;     /* integral time [s]; 0 = proportional only */
     /* current loop */
-    double current_tau_s;         /* first-order lag time constant of the closed current loop [s] */
-    double current_max_A;         /* current limit [A] */
-    double force_const_N_A;       /* motor force per ampere, referred to the axis [N/A] */
+    double current_tau_s;   /* first-order lag time constant of the closed current loop [s] */
+    double current_max_A;   /* current limit [A] */
+    double force_const_N_A; /* motor force per ampere, referred to the axis [N/A] */
     /* mechanics */
-    double motor_mass_kg;         /* rotor and screw inertia referred to the axis [kg] */
-    double load_mass_kg;          /* table / carriage / gantry [kg] */
-    double stiffness_N_m;         /* coupling spring [N/m] */
-    double damping_N_s_m;         /* coupling damper [N s/m] */
-    double viscous_N_s_m;         /* viscous friction on the load [N s/m] */
-    double coulomb_N;             /* Coulomb friction on the load [N] */
+    double motor_mass_kg; /* rotor and screw inertia referred to the axis [kg] */
+    double load_mass_kg;  /* table / carriage / gantry [kg] */
+    double stiffness_N_m; /* coupling spring [N/m] */
+    double damping_N_s_m; /* coupling damper [N s/m] */
+    double viscous_N_s_m; /* viscous friction on the load [N s/m] */
+    double coulomb_N;     /* Coulomb friction on the load [N] */
     /* simulation */
     double servo_period_s;        /* loop rate and integration substep [s] */
     double encoder_counts_per_mm; /* position encoder resolution [counts/mm or counts/rad]; 0 = ideal */
@@ -76,18 +76,18 @@ typedef struct sim_drive_params {
 
 typedef struct sim_drive {
     sim_drive_params p;
-    double cycle_s;     /* control cycle (the setpoint period) */
-    uint32_t n_sub;     /* substeps per cycle */
-    double dt_s;        /* substep = cycle_s / n_sub (<= servo_period_s) */
-    double unit_m;      /* metres per API unit: 1e-3 (mm) or 1 (rad) */
-    double v_eps_m_s;   /* Coulomb regularisation velocity */
+    double cycle_s;   /* control cycle (the setpoint period) */
+    uint32_t n_sub;   /* substeps per cycle */
+    double dt_s;      /* substep = cycle_s / n_sub (<= servo_period_s) */
+    double unit_m;    /* metres per API unit: 1e-3 (mm) or 1 (rad) */
+    double v_eps_m_s; /* Coulomb regularisation velocity */
     /* state, SI */
     double x_m, v_m, x_l, v_l, i_A;
-    double integ_m_s;   /* velocity-loop integrator, in m/s (i = kp (e + integ)) */
-    double set_prev_m;  /* setpoint at the end of the previous cycle */
-    double set_m;       /* setpoint of the last cycle */
-    double i_cmd_A;     /* last current command (after the clamp) */
-    bool limited;       /* the current command was clamped during the last cycle */
+    double integ_m_s;  /* velocity-loop integrator, in m/s (i = kp (e + integ)) */
+    double set_prev_m; /* setpoint at the end of the previous cycle */
+    double set_m;      /* setpoint of the last cycle */
+    double i_cmd_A;    /* last current command (after the clamp) */
+    bool limited;      /* the current command was clamped during the last cycle */
     uint64_t cycles;
 } sim_drive;
 

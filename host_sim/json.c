@@ -260,8 +260,9 @@ static int parse_container(parser *p, int parent, bool object)
             skip_ws(p);
             if (object) {
                 if (p->i >= p->n || p->s[p->i] != '"')
-                    return fail(p, p->i, p->i < p->n && p->s[p->i] == '}' ? "trailing comma in object"
-                                                                          : "expected a string key");
+                    return fail(p, p->i,
+                                p->i < p->n && p->s[p->i] == '}' ? "trailing comma in object"
+                                                                 : "expected a string key");
                 int key = parse_string(p, k);
                 if (key < 0)
                     return -1;

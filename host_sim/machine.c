@@ -85,14 +85,14 @@ static sim_machine_status get_num(const ctx *c, int obj, const char *where, cons
     double x;
     sim_json_number(c->text, &c->t[v], &x);
     if (x < 0 || (!allow_zero && x == 0))
-        return fail(c, v, SIM_MACHINE_E_VALUE, "%s\"%s\" must be %s (got %g)", where, key,
-                    allow_zero ? ">= 0" : "> 0", x);
+        return fail(c, v, SIM_MACHINE_E_VALUE, "%s\"%s\" must be %s (got %g)", where, key, allow_zero ? ">= 0" : "> 0",
+                    x);
     *out = x;
     return SIM_MACHINE_OK;
 }
 
-static sim_machine_status get_str(const ctx *c, int obj, const char *where, const char *key, bool required,
-                                  char *buf, size_t bufsize, int *tok)
+static sim_machine_status get_str(const ctx *c, int obj, const char *where, const char *key, bool required, char *buf,
+                                  size_t bufsize, int *tok)
 {
     int v = sim_json_find(c->text, c->t, obj, key);
     if (tok)
@@ -117,13 +117,15 @@ typedef struct {
     bool allow_zero;
 } drive_key;
 
-#define DK(f, z) {#f, offsetof(sim_drive_params, f), z}
+#define DK(f, z)                             \
+    {                                        \
+#f, offsetof(sim_drive_params, f), z \
+    }
 static const drive_key k_drive_keys[] = {
-    DK(kv_1_s, false),        DK(vff_gain, true),        DK(aff_gain, true),       DK(vel_kp_A_s_m, false),
-    DK(vel_ti_s, true),
-    DK(current_tau_s, false), DK(current_max_A, false),  DK(force_const_N_A, false), DK(motor_mass_kg, false),
-    DK(load_mass_kg, false),  DK(stiffness_N_m, false),  DK(damping_N_s_m, true),  DK(viscous_N_s_m, true),
-    DK(coulomb_N, true),      DK(servo_period_s, false),
+    DK(kv_1_s, false),        DK(vff_gain, true),       DK(aff_gain, true),        DK(vel_kp_A_s_m, false),
+    DK(vel_ti_s, true),       DK(current_tau_s, false), DK(current_max_A, false),  DK(force_const_N_A, false),
+    DK(motor_mass_kg, false), DK(load_mass_kg, false),  DK(stiffness_N_m, false),  DK(damping_N_s_m, true),
+    DK(viscous_N_s_m, true),  DK(coulomb_N, true),      DK(servo_period_s, false),
 };
 #define N_DRIVE_KEYS (sizeof k_drive_keys / sizeof k_drive_keys[0])
 
@@ -149,10 +151,11 @@ static sim_machine_status load_drive(const ctx *c, int obj, const char *where, s
     return SIM_MACHINE_OK;
 }
 
-static const char *const k_linear_keys[] = {"name", "v_max_mm_s", "a_max_mm_s2", "j_max_mm_s3", "snap_max_mm_s4",
-                                            "counts_per_mm", "drive"};
-static const char *const k_rotary_keys[] = {"name", "v_max_deg_s", "a_max_deg_s2", "j_max_deg_s3",
-                                            "snap_max_deg_s4", "counts_per_deg", "drive"};
+static const char *const k_linear_keys[] = {"name",           "v_max_mm_s",    "a_max_mm_s2", "j_max_mm_s3",
+                                            "snap_max_mm_s4", "counts_per_mm", "drive"};
+static const char *const k_rotary_keys[] = {"name",         "v_max_deg_s",     "a_max_deg_s2",
+                                            "j_max_deg_s3", "snap_max_deg_s4", "counts_per_deg",
+                                            "drive"};
 
 static sim_machine_status load_axis(const ctx *c, int obj, int idx, double cycle_s, sim_machine_axis *a)
 {
@@ -237,14 +240,14 @@ static sim_machine_status load_axis(const ctx *c, int obj, int idx, double cycle
     return SIM_MACHINE_OK;
 }
 
-static const char *const k_top_keys[] = {"format", "name", "description", "cycle_s", "lookahead_blocks",
-                                         "blend_tol_mm", "axes"};
+static const char *const k_top_keys[] = {"format",           "name",         "description", "cycle_s",
+                                         "lookahead_blocks", "blend_tol_mm", "axes"};
 
 static sim_machine_status load_impl(const char *text, size_t len, const char *source, sim_machine *out, char *err,
                                     size_t errlen, sim_json_tok *toks)
 {
-    ctx c = {.text = text, .len = len, .source = source ? source : "(machine)", .t = toks, .err = err,
-             .errlen = errlen};
+    ctx c =
+        {.text = text, .len = len, .source = source ? source : "(machine)", .t = toks, .err = err, .errlen = errlen};
     if (err && errlen)
         err[0] = '\0';
     if (!text || !out)
@@ -317,8 +320,8 @@ static sim_machine_status load_impl(const char *text, size_t len, const char *so
     return SIM_MACHINE_OK;
 }
 
-sim_machine_status sim_machine_load_text(const char *text, size_t len, const char *source, sim_machine *out,
-                                         char *err, size_t errlen)
+sim_machine_status sim_machine_load_text(const char *text, size_t len, const char *source, sim_machine *out, char *err,
+                                         size_t errlen)
 {
     sim_json_tok *toks = malloc(MAX_TOKS * sizeof *toks);
     if (!toks) {

@@ -45,34 +45,34 @@ typedef enum sim_machine_status {
 } sim_machine_status;
 
 typedef struct sim_machine_axis {
-    char name;                /* 'X' 'Y' 'Z' 'A' 'B' 'C' */
-    int index;                /* G-code axis index: X=0 .. C=5 (see gcode.h) */
-    bool rotary;              /* unit u = rad (else mm) */
-    double v_max_u_s;         /* velocity limit [u/s] */
-    double a_max_u_s2;        /* acceleration limit [u/s^2] */
-    double j_max_u_s3;        /* jerk limit [u/s^3] */
-    double snap_max_u_s4;     /* snap (jerk derivative) limit [u/s^4] */
-    double counts_per_u;      /* encoder / step resolution [counts/u] */
-    sim_drive_params drive;   /* the simulated drive of this axis */
+    char name;              /* 'X' 'Y' 'Z' 'A' 'B' 'C' */
+    int index;              /* G-code axis index: X=0 .. C=5 (see gcode.h) */
+    bool rotary;            /* unit u = rad (else mm) */
+    double v_max_u_s;       /* velocity limit [u/s] */
+    double a_max_u_s2;      /* acceleration limit [u/s^2] */
+    double j_max_u_s3;      /* jerk limit [u/s^3] */
+    double snap_max_u_s4;   /* snap (jerk derivative) limit [u/s^4] */
+    double counts_per_u;    /* encoder / step resolution [counts/u] */
+    sim_drive_params drive; /* the simulated drive of this axis */
 } sim_machine_axis;
 
 typedef struct sim_machine {
     char name[64];
     char description[256];
-    double cycle_s;           /* control (interpolation) cycle [s] */
-    int lookahead_blocks;     /* planner look-ahead depth [blocks] */
-    double blend_tol_mm;      /* default blend tolerance (G64 without P) [mm] */
+    double cycle_s;       /* control (interpolation) cycle [s] */
+    int lookahead_blocks; /* planner look-ahead depth [blocks] */
+    double blend_tol_mm;  /* default blend tolerance (G64 without P) [mm] */
     int n_axes;
     sim_machine_axis axes[SIM_MACHINE_MAX_AXES]; /* in file order */
-    uint8_t axis_mask;        /* bit k set: G-code axis k exists (for lsm_gcode_options.axis_mask) */
+    uint8_t axis_mask;                           /* bit k set: G-code axis k exists (for lsm_gcode_options.axis_mask) */
 } sim_machine;
 
 /* Load from a file / from text. `source` names the text in messages (e.g. the file name). On error
  * the message (if err != NULL) reads like "router.json:12:9: axes[0]: unknown key \"v_mx_mm_s\"".
  * *m is only written on success. */
 sim_machine_status sim_machine_load_file(const char *path, sim_machine *m, char *err, size_t errlen);
-sim_machine_status sim_machine_load_text(const char *text, size_t len, const char *source, sim_machine *m,
-                                         char *err, size_t errlen);
+sim_machine_status sim_machine_load_text(const char *text, size_t len, const char *source, sim_machine *m, char *err,
+                                         size_t errlen);
 
 /* The axis with this name ('x' or 'X'), or NULL. */
 const sim_machine_axis *sim_machine_axis_by_name(const sim_machine *m, char name);

@@ -76,12 +76,12 @@ typedef struct pblk {
 typedef struct prog {
     pblk *v;
     size_t n, cap;
-    sim_run_mfunc *ev;  /* machine functions (gcode.h events) */
+    sim_run_mfunc *ev; /* machine functions (gcode.h events) */
     size_t n_ev, cap_ev;
     size_t n_errors;
-    lsm_geom *path; /* the programmed path (X Y Z part of every block) */
-    double *s0;     /* cumulative length at the start of each path element */
-    uint32_t *pline;/* source line of each path element */
+    lsm_geom *path;  /* the programmed path (X Y Z part of every block) */
+    double *s0;      /* cumulative length at the start of each path element */
+    uint32_t *pline; /* source line of each path element */
     size_t np;
     double end[LSM_MAX_AXES];
     double length;
@@ -273,7 +273,8 @@ static double dist_elem(const lsm_geom *g, const double x[3])
         double q[3];
         for (int i = 0; i < 3; i++)
             q[i] = ac[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
-        const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
+        const double r =
+            sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
         if (r < best)
             best = r;
     }
@@ -282,7 +283,8 @@ static double dist_elem(const lsm_geom *g, const double x[3])
     lsm_geom_eval(g, g->len, e1, NULL, NULL);
     for (int k = 0; k < 2; k++) {
         const lsm_real *q = k ? e1 : e0;
-        const double r = sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
+        const double r =
+            sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
         if (r < best)
             best = r;
     }
@@ -387,9 +389,9 @@ static lsm_status append_block(lsm_planner *pl, const pblk *q)
 
 /* Machine functions run by the Lissom run (see sim_run_mfunc). */
 typedef struct mf_gate {
-    size_t i;              /* next event to run */
-    uint64_t dwell_until;  /* the stream waits up to this cycle (G4) */
-    bool flushed;          /* the planner was flushed for the pending exact stop */
+    size_t i;             /* next event to run */
+    uint64_t dwell_until; /* the stream waits up to this cycle (G4) */
+    bool flushed;         /* the planner was flushed for the pending exact stop */
 } mf_gate;
 
 /* True when the machine rests on the programmed end of the blocks before `next`. */
@@ -478,7 +480,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     const double max_t = o->max_time_s;
     const uint64_t max_cycles = max_t > 0 ? (uint64_t)(max_t / cfg.cycle_s) + 1 : UINT64_MAX;
     const uint64_t stall_cycles = (uint64_t)(SIM_STALL_S / cfg.cycle_s) + 1;
-    uint64_t still = 0; /* cycles without progress */
+    uint64_t still = 0;              /* cycles without progress */
     lsm_real last_pos[LSM_MAX_AXES]; /* the setpoints' own type (float on the host-float build) */
     memcpy(last_pos, start, sizeof last_pos);
     double t_append = 0, t_step = 0, t_prep = 0;
@@ -561,7 +563,9 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
                      "stalled: no motion and no block taken for %.0f s of machine time (at %.3f s, interpolator %s, "
                      "G-code line %u, %zu of %zu blocks taken)",
                      SIM_STALL_S, (double)k * cfg.cycle_s,
-                     s == LSM_INTERP_IDLE ? "idle" : s == LSM_INTERP_HELD ? "held" : "running",
+                     s == LSM_INTERP_IDLE   ? "idle"
+                     : s == LSM_INTERP_HELD ? "held"
+                                            : "running",
                      cb ? (unsigned)cb->seq : 0u, next, p->n);
             rc = -1;
             goto done;
@@ -594,18 +598,18 @@ typedef struct gpath {
      * curvature jumps) and every block end and stop is a node; intervals turn by at most 0.02 rad. Exact
      * evaluation of the clothoids costs 2-3x the planning time; the table is within 6e-10 mm of them on the
      * example programs (measured on 2e6 points per program) */
-    double *tab;      /* 6 per node: x y z tx ty tz */
+    double *tab; /* 6 per node: x y z tx ty tz */
     size_t *tab_off;
     uint32_t *tab_m;
     lsm_geom *g;
-    double *s0;       /* cumulative start of each block */
-    double *rot;      /* A B C at each block's start (3 per block) */
-    double *feed;     /* programmed feed of each block (mm/s; inf for rapids) */
+    double *s0;   /* cumulative start of each block */
+    double *rot;  /* A B C at each block's start (3 per block) */
+    double *feed; /* programmed feed of each block (mm/s; inf for rapids) */
     size_t n;
     double len;
-    int has_rot;      /* the machine has A B or C */
-    size_t hint;      /* the block of the last evaluation */
-    double *stops;    /* where the planner stops (LSM_PB_STOP), ascending: VPOp comes to rest there too */
+    int has_rot;   /* the machine has A B or C */
+    size_t hint;   /* the block of the last evaluation */
+    double *stops; /* where the planner stops (LSM_PB_STOP), ascending: VPOp comes to rest there too */
     size_t n_stops;
 } gpath;
 
@@ -801,10 +805,10 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
 }
 
 /* The Hermite table of the path (gpath). */
-#define VP_TAB_STEP_MM 0.004      /* node spacing: the table is within 6e-10 mm of the exact clothoids */
-#define VP_TAB_MAX_NODES 2e6      /* coarser steps on long paths, so that the table stays about 2e6 nodes */
-#define VP_TAB_MAX_TURN_RAD 0.02  /* and at most this turning per interval (tiny, tight clothoids) */
-#define VP_TAB_MAX_INTERVALS 1e6  /* per block */
+#define VP_TAB_STEP_MM 0.004         /* node spacing: the table is within 6e-10 mm of the exact clothoids */
+#define VP_TAB_MAX_NODES 2e6         /* coarser steps on long paths, so that the table stays about 2e6 nodes */
+#define VP_TAB_MAX_TURN_RAD 0.02     /* and at most this turning per interval (tiny, tight clothoids) */
+#define VP_TAB_MAX_INTERVALS 1e6     /* per block */
 #define VP_DEFAULT_MAX_TIME_S 3600.0 /* VPOp's motion is cut off after this (unless --max-time says otherwise) */
 
 /* The block of gp that holds arc length s (binary search on the block starts). */

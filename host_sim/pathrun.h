@@ -30,7 +30,7 @@ typedef enum sim_run_planner { SIM_RUN_LISSOM = 0, SIM_RUN_VPOP = 1 } sim_run_pl
 /* Something to do at a given cycle (tests, CLI): hold, resume, override. */
 typedef struct sim_run_event {
     uint64_t cycle;
-    int kind;       /* 1 hold, 2 resume, 3 override (value) */
+    int kind; /* 1 hold, 2 resume, 3 override (value) */
     double value;
 } sim_run_event;
 
@@ -42,19 +42,19 @@ typedef void (*sim_run_progress_fn)(void *ctx, sim_run_phase phase, double done,
 
 typedef struct sim_run_opts {
     const sim_machine *machine;
-    const char *text;          /* the G-code program */
+    const char *text; /* the G-code program */
     size_t len;
     sim_run_planner planner;
-    uint32_t capacity;         /* planner blocks; 0: max(256, 3 lookahead_blocks + 8) */
-    bool drives;               /* also simulate the drives */
-    double max_time_s;         /* stop with an error if the run takes longer (0: no limit; the Lissom planner's
+    uint32_t capacity;   /* planner blocks; 0: max(256, 3 lookahead_blocks + 8) */
+    bool drives;         /* also simulate the drives */
+    double max_time_s;   /* stop with an error if the run takes longer (0: no limit; the Lissom planner's
                                   run stops with an error when it stalls: no motion and no block taken for 10 s
                                   while no event is pending; the VPOp reference keeps a 3600 s bound) */
-    uint32_t feed_every;       /* > 0: append at most one block every this many cycles (underrun tests) */
+    uint32_t feed_every; /* > 0: append at most one block every this many cycles (underrun tests) */
     const sim_run_event *events;
     size_t n_events;
     lsm_planner_config *cfg_override; /* optional: planner configuration to use instead of the machine's */
-    sim_run_progress_fn progress; /* optional progress reports (NULL: none) */
+    sim_run_progress_fn progress;     /* optional progress reports (NULL: none) */
     void *progress_ctx;
 } sim_run_opts;
 
@@ -63,44 +63,44 @@ typedef struct sim_run_opts {
  * block before it, runs it (G4: the dwell's whole cycles at rest; M0/M1: the pause is resumed at once) and goes on. */
 typedef struct sim_run_mfunc {
     lsm_gcode_event ev;
-    size_t before_block;       /* index of the first program block after it (= blocks before it) */
-    double t_s;                /* machine time when it ran (s); -1: not run (the VPOp reference runs no events) */
+    size_t before_block; /* index of the first program block after it (= blocks before it) */
+    double t_s;          /* machine time when it ran (s); -1: not run (the VPOp reference runs no events) */
 } sim_run_mfunc;
 
 typedef struct sim_run_result {
-    size_t n;                  /* setpoints (one per cycle) */
+    size_t n; /* setpoints (one per cycle) */
     double cycle_s;
-    int n_axes;                /* machine axes */
+    int n_axes;                           /* machine axes */
     int axis_index[SIM_MACHINE_MAX_AXES]; /* their G-code index (X = 0 .. C = 5) */
     char axis_name[SIM_MACHINE_MAX_AXES];
-    double *q;                 /* n x LSM_MAX_AXES setpoints */
-    double *feed;              /* n: path feed (mm/s) */
-    uint32_t *line;            /* n: source line of the block being run */
-    double *act;               /* n x LSM_MAX_AXES actual positions (drives) or NULL */
-    double duration_s;         /* time of the last setpoint that moved (the motion's end) */
-    uint64_t cycles;           /* cycles up to then */
+    double *q;         /* n x LSM_MAX_AXES setpoints */
+    double *feed;      /* n: path feed (mm/s) */
+    uint32_t *line;    /* n: source line of the block being run */
+    double *act;       /* n x LSM_MAX_AXES actual positions (drives) or NULL */
+    double duration_s; /* time of the last setpoint that moved (the motion's end) */
+    uint64_t cycles;   /* cycles up to then */
     double max_v[LSM_MAX_AXES], max_a[LSM_MAX_AXES], max_j[LSM_MAX_AXES];
     double max_dev_mm;
     double end_error;
     double max_follow_err[LSM_MAX_AXES];
     double prog_end[LSM_MAX_AXES];
     double start[LSM_MAX_AXES];  /* where the machine rests before the first setpoint */
-    size_t prog_blocks;        /* motion blocks in the program */
-    double prog_length_mm;     /* length of the programmed path (X Y Z) */
-    double plan_ns_per_block;  /* host time spent in append (corner smoothing + backward pass) per block */
-    double interp_ns_per_cycle;/* host time per interpolator cycle (lsm_interp_step; tick_plans included) */
-    double prepare_ns_per_piece;/* host time of lsm_interp_prepare (background piece planning) per prepared piece */
-    double piece_ns;           /* host time per planned piece */
+    size_t prog_blocks;          /* motion blocks in the program */
+    double prog_length_mm;       /* length of the programmed path (X Y Z) */
+    double plan_ns_per_block;    /* host time spent in append (corner smoothing + backward pass) per block */
+    double interp_ns_per_cycle;  /* host time per interpolator cycle (lsm_interp_step; tick_plans included) */
+    double prepare_ns_per_piece; /* host time of lsm_interp_prepare (background piece planning) per prepared piece */
+    double piece_ns;             /* host time per planned piece */
     lsm_planner_stats stats;
     uint32_t replans, plan_errors;
-    uint32_t prepared;         /* pieces planned in the background (lsm_interp_prepare) */
-    uint32_t tick_plans;       /* pieces planned inside the control cycle (none prepared in time) */
-    uint32_t pl_block_bytes;   /* sizeof(lsm_pblock) of this build */
+    uint32_t prepared;           /* pieces planned in the background (lsm_interp_prepare) */
+    uint32_t tick_plans;         /* pieces planned inside the control cycle (none prepared in time) */
+    uint32_t pl_block_bytes;     /* sizeof(lsm_pblock) of this build */
     double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
     double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
-    sim_run_mfunc *mfuncs;     /* the program's machine functions, in order */
+    sim_run_mfunc *mfuncs;       /* the program's machine functions, in order */
     size_t n_mfuncs;
-    size_t n_gcode_errors;     /* refused lines (the first is in err; `lissom-sim check` lists them all) */
+    size_t n_gcode_errors; /* refused lines (the first is in err; `lissom-sim check` lists them all) */
     char err[320];
 } sim_run_result;
 

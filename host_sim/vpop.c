@@ -12,16 +12,16 @@ typedef struct vctx {
     const sim_vpop_path *p;
     const sim_vpop_limits *lim;
     double dt;
-    double h;          /* J_min dt³ / 4 (mm): the jerk window scale (search margins, whole-range scan step) */
-    double jt;         /* tangential jerk bound for the stop test: the smallest axis jerk limit */
-    double jn;         /* |(J_x, J_y, J_z)| if only linear axes are constrained (s bounds from the chord), else 0 */
-    double tol;        /* the searches locate the ends of the feasible set to this (mm) */
+    double h;   /* J_min dt³ / 4 (mm): the jerk window scale (search margins, whole-range scan step) */
+    double jt;  /* tangential jerk bound for the stop test: the smallest axis jerk limit */
+    double jn;  /* |(J_x, J_y, J_z)| if only linear axes are constrained (s bounds from the chord), else 0 */
+    double tol; /* the searches locate the ends of the feasible set to this (mm) */
     sim_vpop_stats *st;
 } vctx;
 
 /* History of the last three steps: s and positions. */
 typedef struct hist {
-    double s[3];                 /* s_j, s_j-1, s_j-2 */
+    double s[3]; /* s_j, s_j-1, s_j-2 */
     double q[3][SIM_VPOP_AXES];
 } hist;
 
@@ -74,7 +74,7 @@ static double viol(const vctx *c, const double lo[SIM_VPOP_AXES], const double h
 typedef struct stepb {
     double lo[SIM_VPOP_AXES], hi[SIM_VPOP_AXES];
     double s0, top, pred;
-    double slo;    /* no s below this is feasible (the chord bound; s0 if none) */
+    double slo; /* no s below this is feasible (the chord bound; s0 if none) */
 } stepb;
 
 /* Returns 0 if an axis's bounds are already empty. */
@@ -220,8 +220,7 @@ static int fast_end(const vctx *c, const stepb *b, int dir, double *out)
  * Grid scan of [w0, w1] (n intervals) for feasible points; the first and last are refined by bisection against
  * their infeasible neighbours. Returns 0 if no grid point is feasible.
  */
-static int scan_window(const vctx *c, const stepb *b, double w0, double w1, int n, int want, double *smin,
-                       double *smax)
+static int scan_window(const vctx *c, const stepb *b, double w0, double w1, int n, int want, double *smin, double *smax)
 {
     const double st = (w1 - w0) / n;
     int first = -1, last = -1;
@@ -489,9 +488,9 @@ int sim_vpop_plan(const sim_vpop_path *p, const sim_vpop_limits *lim, double dt,
     double *S = calloc(cap, sizeof *S);
     if (!S)
         return -1;
-    long n = 0;            /* S[0 .. n-1] planned */
-    long last_brake = 0;   /* the dichotomy searches from here */
-    int cert_beta = 1;     /* the braking sequence certified at last_brake (at rest at the start: any) */
+    long n = 0;          /* S[0 .. n-1] planned */
+    long last_brake = 0; /* the dichotomy searches from here */
+    int cert_beta = 1;   /* the braking sequence certified at last_brake (at rest at the start: any) */
     hist h;
     hist_at(&c, S, -1, &h);
     const double L = p->length;

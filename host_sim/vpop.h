@@ -45,9 +45,9 @@
 #define SIM_VPOP_AXES 6
 
 typedef struct sim_vpop_path {
-    double length;                                           /* L (mm) */
+    double length;                                              /* L (mm) */
     void (*eval)(void *ctx, double s, double q[SIM_VPOP_AXES]); /* positions at s in [0, L] */
-    double (*feed)(void *ctx, double s);                     /* programmed feed at s (mm/s); NULL: no feed limit */
+    double (*feed)(void *ctx, double s);                        /* programmed feed at s (mm/s); NULL: no feed limit */
     void *ctx;
     /* optional: positions and their derivatives dq/ds at s (the searches linearise with them); NULL: central
      * differences of eval */
@@ -58,7 +58,7 @@ typedef struct sim_vpop_path {
 } sim_vpop_path;
 
 typedef struct sim_vpop_limits {
-    uint8_t axis_mask;                 /* axes constrained (and moving) */
+    uint8_t axis_mask; /* axes constrained (and moving) */
     double v[SIM_VPOP_AXES], a[SIM_VPOP_AXES], j[SIM_VPOP_AXES];
     /* 0: at an empty set, take the first step of the certified braking sequence at the switching step (the
      * paper's rule, with its s_min replaced by our sequences). N > 0: N bisection steps for the largest step
@@ -70,11 +70,11 @@ typedef struct sim_vpop_limits {
 #define SIM_VPOP_REFINE 8
 
 typedef struct sim_vpop_stats {
-    size_t steps;       /* setpoints */
-    size_t evals;       /* path evaluations */
-    size_t backtracks;  /* dichotomies run */
-    size_t tests;       /* braking sequences simulated by the dichotomies */
-    size_t fallbacks;   /* steps where the linearised search gave no answer and the window scan ran */
+    size_t steps;      /* setpoints */
+    size_t evals;      /* path evaluations */
+    size_t backtracks; /* dichotomies run */
+    size_t tests;      /* braking sequences simulated by the dichotomies */
+    size_t fallbacks;  /* steps where the linearised search gave no answer and the window scan ran */
     /* the first empty set, numbered as the paper does (s_j, j = 1 the first step after s_0 = 0 at rest): the
      * step j, the steps the dichotomy then tested (in order) and the step where s_min was taken; 0: none */
     long first_fail, first_brake;
@@ -102,11 +102,11 @@ typedef struct sim_bspline {
     int n_ctrl;
     double knots[32];
     double ctrl[16][2];
-    double *tab_u, *tab_s;  /* arc-length table */
-    double *tab_v;          /* |C'(u)| at the table's nodes */
+    double *tab_u, *tab_s; /* arc-length table */
+    double *tab_v;         /* |C'(u)| at the table's nodes */
     int n_tab;
     double length;
-    double feed;            /* constant programmed feed (mm/s) */
+    double feed; /* constant programmed feed (mm/s) */
 } sim_bspline;
 
 /* Builds the arc-length table (n_tab intervals, Gauss-Legendre). Returns 0 or -1. */

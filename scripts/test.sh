@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Quick start, command 2 of 2: runs every test. `.ci/run` runs exactly this.
 #   1. dependencies (idempotent) and the host build
+#   1b. lint: format drift (clang-format) and clang-tidy on firmware/ (scripts/lint.sh)
 #   2. ctest: the cmocka unit tests, double and float builds (randomized tests at their CI counts)
 #   3. the Cortex-M4F cross build: -Wall -Wextra -Werror, no heap or printf linked, images run under QEMU
 #   4. pytest: the Python tests (CLI contracts, references, plots, EDS, ...)
@@ -15,6 +16,12 @@ scripts/build.sh || exit 1
 
 passed=0; failed=0; status=0
 log=$(mktemp)
+
+# format drift (.clang-format, every tracked .c/.h) and clang-tidy on firmware/ (.clang-tidy): one check each
+echo "== lint (scripts/lint.sh)"
+for what in format tidy; do
+  if scripts/lint.sh "$what"; then passed=$((passed + 1)); else failed=$((failed + 1)); status=1; fi
+done
 
 echo "== ctest"
 ctest --preset host 2>&1 | tee "$log"

@@ -73,7 +73,9 @@ static float atan_pos(float a) /* a >= 0 */
         a = (a - 1.0f) / (a + 1.0f);
     }
     const float z = a * a;
-    return base + ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * a + a);
+    return base +
+           ((((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z - 3.33329491539e-1f) * z * a +
+            a);
 }
 
 float lsm_math_atan2f(float y, float x)

@@ -121,7 +121,13 @@ static inline void lsm_sincos(lsm_real x, lsm_real *s, lsm_real *c)
 #endif
 }
 
-static inline lsm_real lsm_min2(lsm_real a, lsm_real b) { return a < b ? a : b; }
-static inline lsm_real lsm_max2(lsm_real a, lsm_real b) { return a > b ? a : b; }
+static inline lsm_real lsm_min2(lsm_real a, lsm_real b)
+{
+    return a < b ? a : b;
+}
+static inline lsm_real lsm_max2(lsm_real a, lsm_real b)
+{
+    return a > b ? a : b;
+}
 
 #endif /* LSM_MATH_H */

@@ -22,27 +22,27 @@
 #include "lsm_config.h"
 #include "status.h"
 
-#define LSM_CAN_MAX_DLC 8u              /* classic CAN: at most 8 data bytes */
-#define LSM_CAN_STD_ID_MAX 0x7FFu       /* largest 11-bit identifier */
-#define LSM_CAN_EXT_ID_MAX 0x1FFFFFFFu  /* largest 29-bit identifier */
-#define LSM_CAN_FLAG_EXT 0x01u          /* flags: the id is a 29-bit extended identifier */
-#define LSM_CAN_FLAG_RTR 0x02u          /* flags: remote transmission request (no data bytes) */
+#define LSM_CAN_MAX_DLC 8u             /* classic CAN: at most 8 data bytes */
+#define LSM_CAN_STD_ID_MAX 0x7FFu      /* largest 11-bit identifier */
+#define LSM_CAN_EXT_ID_MAX 0x1FFFFFFFu /* largest 29-bit identifier */
+#define LSM_CAN_FLAG_EXT 0x01u         /* flags: the id is a 29-bit extended identifier */
+#define LSM_CAN_FLAG_RTR 0x02u         /* flags: remote transmission request (no data bytes) */
 
 /* One classic CAN frame. */
 typedef struct lsm_can_frame {
-    uint32_t id;       /* identifier: <= LSM_CAN_STD_ID_MAX (CANopen), or 29 bits with LSM_CAN_FLAG_EXT */
-    uint8_t dlc;       /* number of data bytes, 0..8 */
-    uint8_t flags;     /* LSM_CAN_FLAG_* */
-    uint8_t data[8];   /* data bytes; only the first dlc are meaningful */
+    uint32_t id;     /* identifier: <= LSM_CAN_STD_ID_MAX (CANopen), or 29 bits with LSM_CAN_FLAG_EXT */
+    uint8_t dlc;     /* number of data bytes, 0..8 */
+    uint8_t flags;   /* LSM_CAN_FLAG_* */
+    uint8_t data[8]; /* data bytes; only the first dlc are meaningful */
 } lsm_can_frame;
 
 /* A FIFO of frames in caller-owned storage. Fields are read-only for the caller. */
 typedef struct lsm_can_txq {
-    lsm_can_frame *buf;   /* storage, cap frames */
-    uint16_t cap;         /* capacity in frames, 1..65535 */
-    uint16_t head;        /* index of the oldest frame */
-    uint16_t count;       /* frames queued */
-    uint32_t dropped;     /* frames refused because the queue was full (wraps) */
+    lsm_can_frame *buf; /* storage, cap frames */
+    uint16_t cap;       /* capacity in frames, 1..65535 */
+    uint16_t head;      /* index of the oldest frame */
+    uint16_t count;     /* frames queued */
+    uint32_t dropped;   /* frames refused because the queue was full (wraps) */
 } lsm_can_txq;
 
 /* Binds the queue to storage[cap]. Errors: LSM_E_NULL, LSM_E_ARG (cap 0 or > 65535). */

@@ -5,16 +5,24 @@
 /* ---- object dictionary table ---------------------------------------------------------------------- */
 
 enum { G_NONE = 0, G_AXIS = 1, G_RPDO = 2, G_TPDO = 3 };
-enum { R_NONE = 0, R_POS = 1, R_ABORT_OPT = 2, R_ERR_BEHAV = 3, R_OVERRIDE = 4, R_IP_INDEX = 5, R_MAP_COUNT = 6,
-       R_COUNT };
+enum {
+    R_NONE = 0,
+    R_POS = 1,
+    R_ABORT_OPT = 2,
+    R_ERR_BEHAV = 3,
+    R_OVERRIDE = 4,
+    R_IP_INDEX = 5,
+    R_MAP_COUNT = 6,
+    R_COUNT
+};
 
 static const lsm_co_od_range k_ranges[R_COUNT] = {
     [R_NONE] = {0, 0},
-    [R_POS] = {1, INT64_MAX},            /* limits and scales: zero is refused (0x06090032) */
-    [R_ABORT_OPT] = {0, 3},              /* 0x6007 */
-    [R_ERR_BEHAV] = {0, 2},              /* 0x1029 sub 1 */
-    [R_OVERRIDE] = {0, 200},             /* 0x5001, percent */
-    [R_IP_INDEX] = {-6, 0},              /* 0x60C2 sub 2: 1 µs .. 1 s units */
+    [R_POS] = {1, INT64_MAX}, /* limits and scales: zero is refused (0x06090032) */
+    [R_ABORT_OPT] = {0, 3},   /* 0x6007 */
+    [R_ERR_BEHAV] = {0, 2},   /* 0x1029 sub 1 */
+    [R_OVERRIDE] = {0, 200},  /* 0x5001, percent */
+    [R_IP_INDEX] = {-6, 0},   /* 0x60C2 sub 2: 1 µs .. 1 s units */
     [R_MAP_COUNT] = {0, LSM_CO_PDO_MAX_MAP},
 };
 
@@ -28,7 +36,10 @@ static const lsm_co_od_range k_ranges[R_COUNT] = {
 
 #define OFF(f) ((uint32_t)offsetof(lsm_canopen, f))
 #define AX(f) OFF(axis[0].f)
-#define ENT(idx, sub, t, sz, fl, grp, rng, arg) {(idx), (sub), (t), (fl), (grp), (rng), (sz), (uint32_t)(arg)}
+#define ENT(idx, sub, t, sz, fl, grp, rng, arg)                      \
+    {                                                                \
+        (idx), (sub), (t), (fl), (grp), (rng), (sz), (uint32_t)(arg) \
+    }
 #define E_U8(i, s, fl, g, r, a) ENT(i, s, LSM_CO_T_U8, 1, fl, g, r, a)
 #define E_I8(i, s, fl, g, r, a) ENT(i, s, LSM_CO_T_I8, 1, fl, g, r, a)
 #define E_U16(i, s, fl, g, r, a) ENT(i, s, LSM_CO_T_U16, 2, fl, g, r, a)
@@ -48,11 +59,11 @@ static const lsm_co_od_range k_ranges[R_COUNT] = {
 #endif
 
 /* NOLINTBEGIN(bugprone-macro-parentheses): arr names a member for offsetof, which takes no parentheses */
-#define MAP_ENTRIES(idx, g, arr)                                                                              \
+#define MAP_ENTRIES(idx, g, arr)                                                                                    \
     E_U8(idx, 0, RW_ | HK_, g, R_MAP_COUNT, OFF(arr[0].n_map)), E_U32(idx, 1, RW_ | HK_, g, 0, OFF(arr[0].map[0])), \
-        E_U32(idx, 2, RW_ | HK_, g, 0, OFF(arr[0].map[1])), E_U32(idx, 3, RW_ | HK_, g, 0, OFF(arr[0].map[2])),   \
-        E_U32(idx, 4, RW_ | HK_, g, 0, OFF(arr[0].map[3])), E_U32(idx, 5, RW_ | HK_, g, 0, OFF(arr[0].map[4])),   \
-        E_U32(idx, 6, RW_ | HK_, g, 0, OFF(arr[0].map[5])), E_U32(idx, 7, RW_ | HK_, g, 0, OFF(arr[0].map[6])),   \
+        E_U32(idx, 2, RW_ | HK_, g, 0, OFF(arr[0].map[1])), E_U32(idx, 3, RW_ | HK_, g, 0, OFF(arr[0].map[2])),     \
+        E_U32(idx, 4, RW_ | HK_, g, 0, OFF(arr[0].map[3])), E_U32(idx, 5, RW_ | HK_, g, 0, OFF(arr[0].map[4])),     \
+        E_U32(idx, 6, RW_ | HK_, g, 0, OFF(arr[0].map[5])), E_U32(idx, 7, RW_ | HK_, g, 0, OFF(arr[0].map[6])),     \
         E_U32(idx, 8, RW_ | HK_, g, 0, OFF(arr[0].map[7]))
 /* NOLINTEND(bugprone-macro-parentheses) */
 
@@ -165,8 +176,7 @@ const lsm_co_od_entry *lsm_canopen_od_table(size_t *n_entries)
 
 static bool emcy_can_send(const lsm_canopen *n)
 {
-    return !n->bus_off &&
-           (n->nmt.state == LSM_CO_NMT_PRE_OPERATIONAL || n->nmt.state == LSM_CO_NMT_OPERATIONAL);
+    return !n->bus_off && (n->nmt.state == LSM_CO_NMT_PRE_OPERATIONAL || n->nmt.state == LSM_CO_NMT_OPERATIONAL);
 }
 
 static void emcy_raise(lsm_canopen *n, uint16_t code, uint8_t reg, uint8_t info, uint32_t extra)
@@ -296,8 +306,8 @@ static lsm_status comm_defaults(lsm_canopen *n)
     n->sdo_cob_rx = 0x600u + cfg->node_id;
     n->sdo_cob_tx = 0x580u + cfg->node_id;
     n->comm_error_behaviour = 0u;
-    if ((st = lsm_co_sdo_init(&n->sdo, &n->od, cfg->node_id, n->sdo_buf, sizeof n->sdo_buf,
-                              cfg->sdo_timeout_us)) != LSM_OK)
+    if ((st = lsm_co_sdo_init(&n->sdo, &n->od, cfg->node_id, n->sdo_buf, sizeof n->sdo_buf, cfg->sdo_timeout_us)) !=
+        LSM_OK)
         return st;
     if ((st = lsm_co_nmt_init(&n->nmt, cfg->node_id, cfg->heartbeat_ms)) != LSM_OK)
         return st;

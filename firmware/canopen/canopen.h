@@ -68,37 +68,37 @@
 
 /* Events the port reports about its CAN controller. */
 typedef enum lsm_can_bus_event {
-    LSM_CAN_BUS_OK = 0,             /* error active again (after error passive or bus-off recovery) */
-    LSM_CAN_BUS_ERROR_PASSIVE = 1,  /* error passive: EMCY 0x8120 */
-    LSM_CAN_BUS_OFF = 2,            /* bus-off: communication-error reaction */
-    LSM_CAN_BUS_RX_OVERRUN = 3      /* the port lost received frames: EMCY 0x8110 */
+    LSM_CAN_BUS_OK = 0,            /* error active again (after error passive or bus-off recovery) */
+    LSM_CAN_BUS_ERROR_PASSIVE = 1, /* error passive: EMCY 0x8120 */
+    LSM_CAN_BUS_OFF = 2,           /* bus-off: communication-error reaction */
+    LSM_CAN_BUS_RX_OVERRUN = 3     /* the port lost received frames: EMCY 0x8110 */
 } lsm_can_bus_event;
 
 /* Statistics of the port's control tick, shown read-only in object 0x5F00 (sub 1..4). The port fills them
  * (lsm_canopen_set_tick_stats); the node only shows them, and keeps them across an NMT reset. */
 typedef struct lsm_canopen_tick_stats {
-    uint32_t ticks;             /* sub 1: control ticks since the port started */
-    uint32_t overruns;          /* sub 2: ticks that fell due while the one before still ran */
-    uint32_t worst_instr;       /* sub 3: longest tick, instructions from the timer event to the end of its work */
-    uint16_t bg_load_permille;  /* sub 4: share of the CPU the background used over the last second, per mille */
-    uint32_t late_wakes;        /* sub 5: ticks that started late because the sleeping CPU was woken late (an
+    uint32_t ticks;            /* sub 1: control ticks since the port started */
+    uint32_t overruns;         /* sub 2: ticks that fell due while the one before still ran */
+    uint32_t worst_instr;      /* sub 3: longest tick, instructions from the timer event to the end of its work */
+    uint16_t bg_load_permille; /* sub 4: share of the CPU the background used over the last second, per mille */
+    uint32_t late_wakes;       /* sub 5: ticks that started late because the sleeping CPU was woken late (an
                                    emulator's host scheduling; not overruns of the tick's own work) */
-    uint32_t clock_ms;          /* sub 6: the port's clock (the now_us the node runs on) in ms, wraps */
+    uint32_t clock_ms;         /* sub 6: the port's clock (the now_us the node runs on) in ms, wraps */
 } lsm_canopen_tick_stats;
 
 typedef struct lsm_canopen_config {
-    uint8_t node_id;                 /* 1..127 */
-    uint8_t n_axes;                  /* 1..LSM_MAX_AXES */
-    uint16_t heartbeat_ms;           /* 0x1017 default, 0 = off */
-    uint8_t master_node_id;          /* 0x1016 sub 1 default: node whose heartbeat is monitored, 1..127, 0 = none */
-    uint16_t master_timeout_ms;      /* its consumer time (0 = not monitored) */
-    uint32_t vendor_id;              /* 0x1018 sub 1..4 */
+    uint8_t node_id;            /* 1..127 */
+    uint8_t n_axes;             /* 1..LSM_MAX_AXES */
+    uint16_t heartbeat_ms;      /* 0x1017 default, 0 = off */
+    uint8_t master_node_id;     /* 0x1016 sub 1 default: node whose heartbeat is monitored, 1..127, 0 = none */
+    uint16_t master_timeout_ms; /* its consumer time (0 = not monitored) */
+    uint32_t vendor_id;         /* 0x1018 sub 1..4 */
     uint32_t product_code;
     uint32_t revision;
     uint32_t serial;
-    const char *device_name;         /* 0x1008 (NUL-terminated, caller-owned, at most 64 bytes shown) */
-    uint32_t sdo_timeout_us;         /* 0 = LSM_CO_SDO_TIMEOUT_US */
-    lsm_can_frame *tx_storage;       /* TX queue storage */
+    const char *device_name;   /* 0x1008 (NUL-terminated, caller-owned, at most 64 bytes shown) */
+    uint32_t sdo_timeout_us;   /* 0 = LSM_CO_SDO_TIMEOUT_US */
+    lsm_can_frame *tx_storage; /* TX queue storage */
     size_t tx_cap;
     lsm_co_path_block *path_storage; /* path buffer storage */
     size_t path_cap;
@@ -106,13 +106,13 @@ typedef struct lsm_canopen_config {
 
 typedef struct lsm_canopen {
     /* node objects */
-    uint32_t device_type;            /* 0x1000 */
-    uint32_t cycle_period_us;        /* 0x1006 (the master's SYNC period, for CSP; 0 = unknown) */
-    const char *device_name;         /* 0x1008 */
-    uint32_t identity[4];            /* 0x1018 sub 1..4 */
-    uint32_t sdo_cob_rx, sdo_cob_tx; /* 0x1200 sub 1, 2 */
-    uint8_t comm_error_behaviour;    /* 0x1029 sub 1 */
-    uint8_t machine_status;          /* 0x5020: bit 0 E-stop, bit 1 a monitored heartbeat lost, bit 2 bus-off */
+    uint32_t device_type;              /* 0x1000 */
+    uint32_t cycle_period_us;          /* 0x1006 (the master's SYNC period, for CSP; 0 = unknown) */
+    const char *device_name;           /* 0x1008 */
+    uint32_t identity[4];              /* 0x1018 sub 1..4 */
+    uint32_t sdo_cob_rx, sdo_cob_tx;   /* 0x1200 sub 1, 2 */
+    uint8_t comm_error_behaviour;      /* 0x1029 sub 1 */
+    uint8_t machine_status;            /* 0x5020: bit 0 E-stop, bit 1 a monitored heartbeat lost, bit 2 bus-off */
     lsm_canopen_tick_stats tick_stats; /* 0x5F00, written by the port */
     uint8_t n_axes;
     uint8_t node_id;
@@ -122,18 +122,18 @@ typedef struct lsm_canopen {
     lsm_co_nmt nmt;
     lsm_co_emcy emcy;
     lsm_co_pdo pdo;
-    lsm_co_pdo pdo_boot;             /* the default PDOs as built at init, restored by the resets */
+    lsm_co_pdo pdo_boot; /* the default PDOs as built at init, restored by the resets */
     bool pdo_boot_valid;
     lsm_co_path path;
     lsm_cia402 axis[LSM_MAX_AXES];
     lsm_can_txq txq;
     uint8_t sdo_buf[LSM_CANOPEN_SDO_BUF];
     /* runtime */
-    lsm_canopen_config cfg;          /* kept for resets */
-    uint32_t now_us;                 /* time of the call being served */
-    uint32_t malformed;              /* frames ignored as malformed (wraps) */
+    lsm_canopen_config cfg; /* kept for resets */
+    uint32_t now_us;        /* time of the call being served */
+    uint32_t malformed;     /* frames ignored as malformed (wraps) */
     uint32_t tx_dropped_seen;
-    uint8_t pending_reset;           /* lsm_co_nmt_cmd waiting for standstill, or 0 */
+    uint8_t pending_reset; /* lsm_co_nmt_cmd waiting for standstill, or 0 */
     bool estop;
     bool bus_off;
     bool error_passive;
@@ -186,8 +186,8 @@ lsm_co_path *lsm_canopen_path(lsm_canopen *node);
 lsm_co_od *lsm_canopen_od(lsm_canopen *node);
 lsm_co_nmt_state lsm_canopen_nmt_state(const lsm_canopen *node);
 uint32_t lsm_canopen_sync_count(const lsm_canopen *node);
-bool lsm_canopen_drive_enable(const lsm_canopen *node);  /* some axis has its power stage on */
-bool lsm_canopen_in_position(const lsm_canopen *node);   /* every axis in position */
+bool lsm_canopen_drive_enable(const lsm_canopen *node); /* some axis has its power stage on */
+bool lsm_canopen_in_position(const lsm_canopen *node);  /* every axis in position */
 /* True when every axis may run path motion (OPERATION ENABLED, mode -1, no stop). */
 bool lsm_canopen_axes_ready_for_path(const lsm_canopen *node);
 

@@ -9,7 +9,7 @@
 typedef enum cmd {
     CMD_NONE,
     CMD_SHUTDOWN,
-    CMD_SWITCH_ON,          /* also disable operation */
+    CMD_SWITCH_ON, /* also disable operation */
     CMD_ENABLE_OPERATION,
     CMD_DISABLE_VOLTAGE,
     CMD_QUICK_STOP
@@ -110,8 +110,7 @@ lsm_cia402_state lsm_cia402_get_state(const lsm_cia402 *ax)
 
 static uint8_t quick_stop_kind(const lsm_cia402 *ax)
 {
-    return (ax->quick_stop_option == 1 || ax->quick_stop_option == 5) ? LSM_CIA402_STOP_SLOW
-                                                                       : LSM_CIA402_STOP_QUICK;
+    return (ax->quick_stop_option == 1 || ax->quick_stop_option == 5) ? LSM_CIA402_STOP_SLOW : LSM_CIA402_STOP_QUICK;
 }
 
 lsm_cia402_stop lsm_cia402_stop_request(const lsm_cia402 *ax, lsm_cia402_stop_req *req)
@@ -131,8 +130,8 @@ lsm_cia402_stop lsm_cia402_stop_request(const lsm_cia402 *ax, lsm_cia402_stop_re
     }
     if (req != NULL) {
         req->kind = kind;
-        req->decel = (kind == LSM_CIA402_STOP_HALT || kind == LSM_CIA402_STOP_SLOW) ? ax->profile_decel
-                                                                                     : ax->quick_stop_decel;
+        req->decel =
+            (kind == LSM_CIA402_STOP_HALT || kind == LSM_CIA402_STOP_SLOW) ? ax->profile_decel : ax->quick_stop_decel;
         req->jerk = ax->profile_jerk;
     }
     return (lsm_cia402_stop)kind;
@@ -176,8 +175,8 @@ static void refresh(lsm_cia402 *ax)
             if (ax->ack)
                 sw |= LSM_CIA402_SW_ACK;
             if (ax->state == LSM_CIA402_OPERATION_ENABLED && ax->standstill) {
-                if (halted(ax) || (!ax->have_active && !ax->have_next &&
-                                   abs_diff(ax->last_target, ax->pos_actual) <= ax->pos_window))
+                if (halted(ax) ||
+                    (!ax->have_active && !ax->have_next && abs_diff(ax->last_target, ax->pos_actual) <= ax->pos_window))
                     sw |= LSM_CIA402_SW_TARGET_REACHED;
             }
             break;
@@ -263,7 +262,7 @@ static void apply_command(lsm_cia402 *ax, cmd c)
         if (c == CMD_SWITCH_ON)
             enter(ax, LSM_CIA402_SWITCHED_ON); /* 3 */
         else if (c == CMD_ENABLE_OPERATION) {
-            enter(ax, LSM_CIA402_SWITCHED_ON); /* 3 */
+            enter(ax, LSM_CIA402_SWITCHED_ON);       /* 3 */
             enter(ax, LSM_CIA402_OPERATION_ENABLED); /* 4 */
         } else if (c == CMD_DISABLE_VOLTAGE || c == CMD_QUICK_STOP)
             enter(ax, LSM_CIA402_SWITCH_ON_DISABLED); /* 7 */
@@ -278,10 +277,10 @@ static void apply_command(lsm_cia402 *ax, cmd c)
         break;
     case LSM_CIA402_OPERATION_ENABLED:
         switch (c) {
-        case CMD_SWITCH_ON: leave_motion(ax, LSM_CIA402_SWITCHED_ON, LSM_CIA402_STOP_SLOW); break;          /* 5 */
-        case CMD_SHUTDOWN: leave_motion(ax, LSM_CIA402_READY_TO_SWITCH_ON, LSM_CIA402_STOP_SLOW); break;    /* 8 */
+        case CMD_SWITCH_ON: leave_motion(ax, LSM_CIA402_SWITCHED_ON, LSM_CIA402_STOP_SLOW); break;               /* 5 */
+        case CMD_SHUTDOWN: leave_motion(ax, LSM_CIA402_READY_TO_SWITCH_ON, LSM_CIA402_STOP_SLOW); break;         /* 8 */
         case CMD_DISABLE_VOLTAGE: leave_motion(ax, LSM_CIA402_SWITCH_ON_DISABLED, LSM_CIA402_STOP_QUICK); break; /* 9 */
-        case CMD_QUICK_STOP: enter_quick_stop(ax); break;                                              /* 11 */
+        case CMD_QUICK_STOP: enter_quick_stop(ax); break; /* 11 */
         case CMD_ENABLE_OPERATION:
             /* a pending 5/8 is cancelled by asking for operation again; the 9 of a disable voltage is not */
             if (ax->pending != NO_PENDING && ax->pending != LSM_CIA402_SWITCH_ON_DISABLED)
@@ -387,9 +386,7 @@ uint32_t lsm_cia402_od_write(lsm_cia402 *ax, uint16_t index, uint8_t sub, int64_
     (void)now_us;
     (void)sub; /* every hooked axis object is a sub-index 0 variable */
     switch (index) {
-    case 0x6040:
-        controlword(ax, (uint16_t)value);
-        return LSM_CO_ABORT_NONE;
+    case 0x6040: controlword(ax, (uint16_t)value); return LSM_CO_ABORT_NONE;
     case 0x6060:
         if (value != LSM_CIA402_MODE_NONE && value != LSM_CIA402_MODE_PP && value != LSM_CIA402_MODE_CSP &&
             value != LSM_CIA402_MODE_PATH)

@@ -64,7 +64,7 @@
 #include "status.h"
 
 typedef enum lsm_cia402_state {
-    LSM_CIA402_NOT_READY = 0,          /* NOT READY TO SWITCH ON */
+    LSM_CIA402_NOT_READY = 0, /* NOT READY TO SWITCH ON */
     LSM_CIA402_SWITCH_ON_DISABLED = 1,
     LSM_CIA402_READY_TO_SWITCH_ON = 2,
     LSM_CIA402_SWITCHED_ON = 3,
@@ -85,7 +85,7 @@ typedef enum lsm_cia402_state {
 /* Controlword bits. */
 #define LSM_CIA402_CW_SWITCH_ON 0x0001u
 #define LSM_CIA402_CW_ENABLE_VOLTAGE 0x0002u
-#define LSM_CIA402_CW_QUICK_STOP 0x0004u      /* active low */
+#define LSM_CIA402_CW_QUICK_STOP 0x0004u /* active low */
 #define LSM_CIA402_CW_ENABLE_OPERATION 0x0008u
 #define LSM_CIA402_CW_NEW_SETPOINT 0x0010u
 #define LSM_CIA402_CW_IMMEDIATE 0x0020u
@@ -100,58 +100,58 @@ typedef enum lsm_cia402_state {
 #define LSM_CIA402_SW_OP_ENABLED 0x0004u
 #define LSM_CIA402_SW_FAULT 0x0008u
 #define LSM_CIA402_SW_VOLTAGE 0x0010u
-#define LSM_CIA402_SW_QUICK_STOP 0x0020u      /* 0 = quick stop active */
+#define LSM_CIA402_SW_QUICK_STOP 0x0020u /* 0 = quick stop active */
 #define LSM_CIA402_SW_SOD 0x0040u
 #define LSM_CIA402_SW_WARNING 0x0080u
 #define LSM_CIA402_SW_REMOTE 0x0200u
 #define LSM_CIA402_SW_TARGET_REACHED 0x0400u
 #define LSM_CIA402_SW_LIMIT 0x0800u
-#define LSM_CIA402_SW_ACK 0x1000u             /* PP: set-point acknowledge; CSP: following the command */
+#define LSM_CIA402_SW_ACK 0x1000u /* PP: set-point acknowledge; CSP: following the command */
 #define LSM_CIA402_SW_FOLLOWING_ERROR 0x2000u
-#define LSM_CIA402_SW_STOPPING 0x4000u        /* manufacturer: a stop is in progress */
+#define LSM_CIA402_SW_STOPPING 0x4000u /* manufacturer: a stop is in progress */
 
 /* How the application must stop the axis (strongest first: EMERGENCY > QUICK > SLOW > HALT). */
 typedef enum lsm_cia402_stop {
-    LSM_CIA402_STOP_NONE = 0,       /* motion allowed */
-    LSM_CIA402_STOP_HALT = 1,       /* halt bit: stop with decel (0x6084), stay enabled, resume when released */
-    LSM_CIA402_STOP_SLOW = 2,       /* disable operation / shutdown, quick stop options 1/5: decel 0x6084 */
-    LSM_CIA402_STOP_QUICK = 3,      /* quick stop options 2/6, disable voltage, lost connection: decel 0x6085 */
-    LSM_CIA402_STOP_EMERGENCY = 4   /* fault reaction (E-stop, following error, application fault): the fastest
+    LSM_CIA402_STOP_NONE = 0,     /* motion allowed */
+    LSM_CIA402_STOP_HALT = 1,     /* halt bit: stop with decel (0x6084), stay enabled, resume when released */
+    LSM_CIA402_STOP_SLOW = 2,     /* disable operation / shutdown, quick stop options 1/5: decel 0x6084 */
+    LSM_CIA402_STOP_QUICK = 3,    /* quick stop options 2/6, disable voltage, lost connection: decel 0x6085 */
+    LSM_CIA402_STOP_EMERGENCY = 4 /* fault reaction (E-stop, following error, application fault): the fastest
                                        jerk-limited stop the machine can do; decel 0x6085 is a lower bound */
 } lsm_cia402_stop;
 
 typedef struct lsm_cia402_stop_req {
-    uint8_t kind;        /* lsm_cia402_stop */
-    uint32_t decel;      /* counts/s² */
-    uint64_t jerk;       /* counts/s³ (0x2060) */
+    uint8_t kind;   /* lsm_cia402_stop */
+    uint32_t decel; /* counts/s² */
+    uint64_t jerk;  /* counts/s³ (0x2060) */
 } lsm_cia402_stop_req;
 
 /* One Profile Position set-point, captured at the new-set-point edge. */
 typedef struct lsm_cia402_setpoint {
-    int32_t target;        /* absolute counts (relative set-points already added to the previous target) */
-    uint32_t velocity;     /* counts/s, 0x6081 */
-    uint32_t accel;        /* counts/s², 0x6083 */
-    uint32_t decel;        /* counts/s², 0x6084 */
-    uint64_t jerk;         /* counts/s³, 0x2060 */
-    uint64_t snap;         /* counts/s⁴, 0x2061 */
-    int16_t profile_type;  /* 0x6086: 0 linear (trapezoidal acceleration), 1 sin² */
-    bool blend;            /* bit 9: pass this target without stopping when a next set-point exists */
-    uint16_t id;           /* running number of accepted set-points */
+    int32_t target;       /* absolute counts (relative set-points already added to the previous target) */
+    uint32_t velocity;    /* counts/s, 0x6081 */
+    uint32_t accel;       /* counts/s², 0x6083 */
+    uint32_t decel;       /* counts/s², 0x6084 */
+    uint64_t jerk;        /* counts/s³, 0x2060 */
+    uint64_t snap;        /* counts/s⁴, 0x2061 */
+    int16_t profile_type; /* 0x6086: 0 linear (trapezoidal acceleration), 1 sin² */
+    bool blend;           /* bit 9: pass this target without stopping when a next set-point exists */
+    uint16_t id;          /* running number of accepted set-points */
 } lsm_cia402_setpoint;
 
 typedef enum lsm_cia402_sp_event {
-    LSM_CIA402_SP_NONE = 0,     /* nothing new */
-    LSM_CIA402_SP_START = 1,    /* no move was running: start one to sp */
-    LSM_CIA402_SP_REPLACE = 2   /* abandon the running move and go to sp from the present state
+    LSM_CIA402_SP_NONE = 0,   /* nothing new */
+    LSM_CIA402_SP_START = 1,  /* no move was running: start one to sp */
+    LSM_CIA402_SP_REPLACE = 2 /* abandon the running move and go to sp from the present state
                                    (change set immediately, or resume after halt) */
 } lsm_cia402_sp_event;
 
 /* What the application reports each cycle. */
 typedef struct lsm_cia402_feedback {
-    int32_t demand;      /* counts: position the profile generator commands now (0x6062) */
-    int32_t actual;      /* counts: measured position (0x6064) */
-    int32_t velocity;    /* counts/s (0x606C) */
-    bool standstill;     /* the commanded motion is at rest (no move running, v = a = 0) */
+    int32_t demand;   /* counts: position the profile generator commands now (0x6062) */
+    int32_t actual;   /* counts: measured position (0x6064) */
+    int32_t velocity; /* counts/s (0x606C) */
+    bool standstill;  /* the commanded motion is at rest (no move running, v = a = 0) */
 } lsm_cia402_feedback;
 
 #define LSM_CIA402_EVENTS 4
@@ -164,46 +164,46 @@ typedef struct lsm_cia402_event {
 
 typedef struct lsm_cia402 {
     /* object values (instance k at index + 0x800·k) */
-    uint16_t controlword;       /* 0x6040 */
-    uint16_t statusword;        /* 0x6041 */
-    uint16_t error_code;        /* 0x603F: code of the present fault, 0 if none */
-    int16_t abort_option;       /* 0x6007: on lost connection 0 none, 1 fault, 2 disable voltage, 3 quick stop */
-    int16_t quick_stop_option;  /* 0x605A: 1, 2, 5, 6 */
-    int16_t profile_type;       /* 0x6086: 0 linear, 1 sin² */
-    int8_t mode;                /* 0x6060 */
-    int8_t mode_display;        /* 0x6061 */
-    uint8_t ip_period_value;    /* 0x60C2 sub 1 */
-    int8_t ip_period_index;     /* 0x60C2 sub 2: period = value · 10^index s */
-    uint16_t fe_timeout_ms;     /* 0x6066 */
-    int32_t target;             /* 0x607A */
-    int32_t pos_demand;         /* 0x6062 */
-    int32_t pos_actual;         /* 0x6064 */
-    int32_t vel_actual;         /* 0x606C */
-    int32_t fe_actual;          /* 0x60F4 */
-    uint32_t fe_window;         /* 0x6065, 0xFFFFFFFF = monitoring off */
-    uint32_t pos_window;        /* 0x6067 */
-    uint32_t profile_velocity;  /* 0x6081 */
-    uint32_t profile_accel;     /* 0x6083 */
-    uint32_t profile_decel;     /* 0x6084 */
-    uint32_t quick_stop_decel;  /* 0x6085 */
-    uint32_t counts_per_mm;     /* 0x2001 */
-    uint64_t profile_jerk;      /* 0x2060 */
-    uint64_t profile_snap;      /* 0x2061 */
+    uint16_t controlword;      /* 0x6040 */
+    uint16_t statusword;       /* 0x6041 */
+    uint16_t error_code;       /* 0x603F: code of the present fault, 0 if none */
+    int16_t abort_option;      /* 0x6007: on lost connection 0 none, 1 fault, 2 disable voltage, 3 quick stop */
+    int16_t quick_stop_option; /* 0x605A: 1, 2, 5, 6 */
+    int16_t profile_type;      /* 0x6086: 0 linear, 1 sin² */
+    int8_t mode;               /* 0x6060 */
+    int8_t mode_display;       /* 0x6061 */
+    uint8_t ip_period_value;   /* 0x60C2 sub 1 */
+    int8_t ip_period_index;    /* 0x60C2 sub 2: period = value · 10^index s */
+    uint16_t fe_timeout_ms;    /* 0x6066 */
+    int32_t target;            /* 0x607A */
+    int32_t pos_demand;        /* 0x6062 */
+    int32_t pos_actual;        /* 0x6064 */
+    int32_t vel_actual;        /* 0x606C */
+    int32_t fe_actual;         /* 0x60F4 */
+    uint32_t fe_window;        /* 0x6065, 0xFFFFFFFF = monitoring off */
+    uint32_t pos_window;       /* 0x6067 */
+    uint32_t profile_velocity; /* 0x6081 */
+    uint32_t profile_accel;    /* 0x6083 */
+    uint32_t profile_decel;    /* 0x6084 */
+    uint32_t quick_stop_decel; /* 0x6085 */
+    uint32_t counts_per_mm;    /* 0x2001 */
+    uint64_t profile_jerk;     /* 0x2060 */
+    uint64_t profile_snap;     /* 0x2061 */
     /* runtime */
-    uint8_t state;              /* lsm_cia402_state */
-    uint8_t pending;            /* state to enter at standstill, or 0xFF */
-    uint8_t pending_stop;       /* stop kind of the pending transition */
+    uint8_t state;        /* lsm_cia402_state */
+    uint8_t pending;      /* state to enter at standstill, or 0xFF */
+    uint8_t pending_stop; /* stop kind of the pending transition */
     uint8_t n_events;
     bool standstill;
-    bool fault_hold;            /* a fault reset is refused while set (E-stop input active) */
-    bool fault_reported;        /* the present fault has an EMCY to clear at reset */
+    bool fault_hold;     /* a fault reset is refused while set (E-stop input active) */
+    bool fault_reported; /* the present fault has an EMCY to clear at reset */
     bool have_active, have_next, fresh, replace, ack, limit;
     bool csp_new;
     bool fe_over;
     uint32_t fe_since_us;
     uint16_t sp_count;
-    uint16_t sp_ignored;        /* new-set-point edges ignored because the buffer was full (wraps) */
-    int32_t last_target;        /* reference of relative set-points */
+    uint16_t sp_ignored; /* new-set-point edges ignored because the buffer was full (wraps) */
+    int32_t last_target; /* reference of relative set-points */
     lsm_cia402_setpoint sp_active, sp_next;
     lsm_cia402_event events[LSM_CIA402_EVENTS];
 } lsm_cia402;
@@ -225,8 +225,8 @@ void lsm_cia402_pp_done(lsm_cia402 *ax);
 bool lsm_cia402_csp_fetch(lsm_cia402 *ax, int32_t *target);
 lsm_cia402_stop lsm_cia402_stop_request(const lsm_cia402 *ax, lsm_cia402_stop_req *req);
 bool lsm_cia402_motion_allowed(const lsm_cia402 *ax);
-bool lsm_cia402_power_enabled(const lsm_cia402 *ax);  /* drive-enable output: OE, QSA, FRA */
-bool lsm_cia402_in_position(const lsm_cia402 *ax);    /* in-position output */
+bool lsm_cia402_power_enabled(const lsm_cia402 *ax); /* drive-enable output: OE, QSA, FRA */
+bool lsm_cia402_in_position(const lsm_cia402 *ax);   /* in-position output */
 lsm_cia402_state lsm_cia402_get_state(const lsm_cia402 *ax);
 
 /* Faults and node events. lsm_cia402_fault: fault reaction with `code` in 0x603F (first fault wins);

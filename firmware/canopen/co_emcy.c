@@ -34,8 +34,8 @@ static void push_history(lsm_co_emcy *emcy, uint16_t code, uint8_t info)
         emcy->n_history++;
 }
 
-static lsm_status send(lsm_co_emcy *emcy, uint16_t code, uint8_t reg, uint8_t info, uint32_t extra,
-                       bool can_send, lsm_can_txq *txq)
+static lsm_status send(lsm_co_emcy *emcy, uint16_t code, uint8_t reg, uint8_t info, uint32_t extra, bool can_send,
+                       lsm_can_txq *txq)
 {
     if (code != LSM_CO_EMCY_NO_ERROR)
         push_history(emcy, code, info);
@@ -112,8 +112,8 @@ lsm_status lsm_co_emcy_clear(lsm_co_emcy *emcy, uint16_t code, uint8_t info, boo
 lsm_status lsm_co_emcy_event(lsm_co_emcy *emcy, uint16_t code, uint8_t reg_bits, uint8_t info, uint32_t extra,
                              bool can_send, lsm_can_txq *txq)
 {
-    return send(emcy, code, (uint8_t)(emcy->error_register | reg_bits | LSM_CO_ERREG_GENERIC), info, extra,
-                can_send, txq);
+    return send(emcy, code, (uint8_t)(emcy->error_register | reg_bits | LSM_CO_ERREG_GENERIC), info, extra, can_send,
+                txq);
 }
 
 uint32_t lsm_co_emcy_write_history_count(lsm_co_emcy *emcy, int64_t value)

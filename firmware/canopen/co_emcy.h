@@ -34,37 +34,37 @@
 #define LSM_CO_ERREG_MANUFACTURER 0x80u
 
 /* Error codes the layer uses. */
-#define LSM_CO_EMCY_NO_ERROR 0x0000u        /* error reset / no error */
-#define LSM_CO_EMCY_SOFTWARE 0x6100u        /* internal software (the application reported a fault) */
-#define LSM_CO_EMCY_COMM 0x8100u            /* communication, generic: latched while the controller is bus-off */
-#define LSM_CO_EMCY_CAN_OVERRUN 0x8110u     /* CAN overrun: frames lost (TX queue full, port RX overrun) */
-#define LSM_CO_EMCY_CAN_PASSIVE 0x8120u     /* CAN in error passive mode */
-#define LSM_CO_EMCY_HEARTBEAT 0x8130u       /* life guard or heartbeat error */
-#define LSM_CO_EMCY_BUS_OFF_RECOVERED 0x8140u /* recovered from bus off */
-#define LSM_CO_EMCY_PDO_LENGTH 0x8210u      /* PDO not processed due to length error */
+#define LSM_CO_EMCY_NO_ERROR 0x0000u            /* error reset / no error */
+#define LSM_CO_EMCY_SOFTWARE 0x6100u            /* internal software (the application reported a fault) */
+#define LSM_CO_EMCY_COMM 0x8100u                /* communication, generic: latched while the controller is bus-off */
+#define LSM_CO_EMCY_CAN_OVERRUN 0x8110u         /* CAN overrun: frames lost (TX queue full, port RX overrun) */
+#define LSM_CO_EMCY_CAN_PASSIVE 0x8120u         /* CAN in error passive mode */
+#define LSM_CO_EMCY_HEARTBEAT 0x8130u           /* life guard or heartbeat error */
+#define LSM_CO_EMCY_BUS_OFF_RECOVERED 0x8140u   /* recovered from bus off */
+#define LSM_CO_EMCY_PDO_LENGTH 0x8210u          /* PDO not processed due to length error */
 #define LSM_CO_EMCY_PDO_LENGTH_EXCEEDED 0x8220u /* PDO length exceeded (processed, extra bytes ignored) */
-#define LSM_CO_EMCY_SYNC_LENGTH 0x8240u     /* unexpected SYNC data length */
-#define LSM_CO_EMCY_FOLLOWING_ERROR 0x8611u /* CiA 402: following error */
-#define LSM_CO_EMCY_EXTERNAL 0x9000u        /* external error: the E-stop input */
-#define LSM_CO_EMCY_PATH_REJECTED 0xFF01u   /* manufacturer: the planner refused a path block (extra = its sequence) */
+#define LSM_CO_EMCY_SYNC_LENGTH 0x8240u         /* unexpected SYNC data length */
+#define LSM_CO_EMCY_FOLLOWING_ERROR 0x8611u     /* CiA 402: following error */
+#define LSM_CO_EMCY_EXTERNAL 0x9000u            /* external error: the E-stop input */
+#define LSM_CO_EMCY_PATH_REJECTED 0xFF01u /* manufacturer: the planner refused a path block (extra = its sequence) */
 
 typedef struct lsm_co_emcy_cond {
     uint16_t code;
-    uint8_t reg;    /* error register bits it latches */
+    uint8_t reg; /* error register bits it latches */
     uint8_t info;
 } lsm_co_emcy_cond;
 
 typedef struct lsm_co_emcy {
-    uint32_t cob_id;          /* 0x1014: 0x80 + node id */
-    uint8_t error_register;   /* 0x1001 */
-    uint8_t n_history;        /* 0x1003 sub 0 */
+    uint32_t cob_id;        /* 0x1014: 0x80 + node id */
+    uint8_t error_register; /* 0x1001 */
+    uint8_t n_history;      /* 0x1003 sub 0 */
     uint8_t n_active;
-    uint8_t overflow;         /* conditions that did not fit in `active` (their register bits stay latched) */
+    uint8_t overflow; /* conditions that did not fit in `active` (their register bits stay latched) */
     uint8_t overflow_reg;
     uint32_t history[LSM_CO_EMCY_HISTORY]; /* 0x1003 sub 1.., newest first */
     lsm_co_emcy_cond active[LSM_CO_EMCY_ACTIVE];
-    uint32_t sent;            /* EMCY frames queued (wraps) */
-    uint32_t suppressed;      /* frames not sent: NMT state, bus-off or full queue (wraps) */
+    uint32_t sent;       /* EMCY frames queued (wraps) */
+    uint32_t suppressed; /* frames not sent: NMT state, bus-off or full queue (wraps) */
 } lsm_co_emcy;
 
 /* Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. */

@@ -126,8 +126,7 @@ uint32_t lsm_co_nmt_rx_heartbeat(lsm_co_nmt *nmt, const lsm_can_frame *f, uint32
 
 uint32_t lsm_co_nmt_process(lsm_co_nmt *nmt, uint32_t now_us, lsm_can_txq *txq)
 {
-    if (nmt->state != LSM_CO_NMT_INITIALISING && nmt->producer_ms != 0u &&
-        (int32_t)(now_us - nmt->next_hb_us) >= 0) {
+    if (nmt->state != LSM_CO_NMT_INITIALISING && nmt->producer_ms != 0u && (int32_t)(now_us - nmt->next_hb_us) >= 0) {
         lsm_can_frame f = {0};
         f.id = 0x700u + nmt->node_id;
         f.dlc = 1u;

@@ -46,25 +46,25 @@ typedef enum lsm_co_nmt_cmd {
 } lsm_co_nmt_cmd;
 
 typedef enum lsm_co_hb_status {
-    LSM_CO_HB_OFF = 0,      /* entry disabled (node id 0 or time 0) */
-    LSM_CO_HB_WAITING = 1,  /* configured, no heartbeat seen yet: not monitored */
-    LSM_CO_HB_ACTIVE = 2,   /* heartbeats arrive in time */
-    LSM_CO_HB_LOST = 3      /* timed out */
+    LSM_CO_HB_OFF = 0,     /* entry disabled (node id 0 or time 0) */
+    LSM_CO_HB_WAITING = 1, /* configured, no heartbeat seen yet: not monitored */
+    LSM_CO_HB_ACTIVE = 2,  /* heartbeats arrive in time */
+    LSM_CO_HB_LOST = 3     /* timed out */
 } lsm_co_hb_status;
 
 typedef struct lsm_co_hb_consumer {
-    uint32_t param;        /* 0x1016 value: node id << 16 | time ms */
-    uint32_t last_us;      /* arrival of the last heartbeat */
-    uint8_t status;        /* lsm_co_hb_status */
-    uint8_t remote_state;  /* state byte of the last heartbeat */
+    uint32_t param;       /* 0x1016 value: node id << 16 | time ms */
+    uint32_t last_us;     /* arrival of the last heartbeat */
+    uint8_t status;       /* lsm_co_hb_status */
+    uint8_t remote_state; /* state byte of the last heartbeat */
 } lsm_co_hb_consumer;
 
 typedef struct lsm_co_nmt {
     uint8_t node_id;
-    uint8_t state;          /* lsm_co_nmt_state */
-    uint16_t producer_ms;   /* 0x1017 */
-    uint32_t next_hb_us;    /* when the next heartbeat is due */
-    uint32_t malformed;     /* NMT or heartbeat frames with a wrong DLC (wraps) */
+    uint8_t state;        /* lsm_co_nmt_state */
+    uint16_t producer_ms; /* 0x1017 */
+    uint32_t next_hb_us;  /* when the next heartbeat is due */
+    uint32_t malformed;   /* NMT or heartbeat frames with a wrong DLC (wraps) */
     lsm_co_hb_consumer cons[LSM_CO_HB_CONSUMERS];
 } lsm_co_nmt;
 

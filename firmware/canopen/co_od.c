@@ -294,9 +294,7 @@ void lsm_co_od_store(const lsm_co_od_ref *ref, const uint8_t *data)
         memcpy(ref->ptr, &v, 4);
         break;
     }
-    default:
-        memcpy(ref->ptr, &raw, 8);
-        break;
+    default: memcpy(ref->ptr, &raw, 8); break;
     }
 }
 

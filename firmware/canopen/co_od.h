@@ -31,67 +31,67 @@
 
 /* CiA 301 data types; the values are the CiA data-type indices (an EDS writes them as DataType=0x0007). */
 typedef enum lsm_co_type {
-    LSM_CO_T_BOOL = 0x01,     /* BOOLEAN, 1 byte, 0 or 1 */
-    LSM_CO_T_I8 = 0x02,       /* INTEGER8 */
-    LSM_CO_T_I16 = 0x03,      /* INTEGER16 */
-    LSM_CO_T_I32 = 0x04,      /* INTEGER32 */
-    LSM_CO_T_U8 = 0x05,       /* UNSIGNED8 */
-    LSM_CO_T_U16 = 0x06,      /* UNSIGNED16 */
-    LSM_CO_T_U32 = 0x07,      /* UNSIGNED32 */
-    LSM_CO_T_REAL32 = 0x08,   /* REAL32 (IEEE 754 single) */
-    LSM_CO_T_VSTRING = 0x09,  /* VISIBLE_STRING, read-only here (see LSM_CO_OD_STRPTR) */
-    LSM_CO_T_DOMAIN = 0x0F,   /* DOMAIN: opaque bytes, write-only through the hook here */
-    LSM_CO_T_I64 = 0x15,      /* INTEGER64 */
-    LSM_CO_T_U64 = 0x1B       /* UNSIGNED64 */
+    LSM_CO_T_BOOL = 0x01,    /* BOOLEAN, 1 byte, 0 or 1 */
+    LSM_CO_T_I8 = 0x02,      /* INTEGER8 */
+    LSM_CO_T_I16 = 0x03,     /* INTEGER16 */
+    LSM_CO_T_I32 = 0x04,     /* INTEGER32 */
+    LSM_CO_T_U8 = 0x05,      /* UNSIGNED8 */
+    LSM_CO_T_U16 = 0x06,     /* UNSIGNED16 */
+    LSM_CO_T_U32 = 0x07,     /* UNSIGNED32 */
+    LSM_CO_T_REAL32 = 0x08,  /* REAL32 (IEEE 754 single) */
+    LSM_CO_T_VSTRING = 0x09, /* VISIBLE_STRING, read-only here (see LSM_CO_OD_STRPTR) */
+    LSM_CO_T_DOMAIN = 0x0F,  /* DOMAIN: opaque bytes, write-only through the hook here */
+    LSM_CO_T_I64 = 0x15,     /* INTEGER64 */
+    LSM_CO_T_U64 = 0x1B      /* UNSIGNED64 */
 } lsm_co_type;
 
 /* Entry flags. */
-#define LSM_CO_OD_R 0x01u       /* readable (SDO upload, TPDO) */
-#define LSM_CO_OD_W 0x02u       /* writable (SDO download, RPDO) */
+#define LSM_CO_OD_R 0x01u /* readable (SDO upload, TPDO) */
+#define LSM_CO_OD_W 0x02u /* writable (SDO download, RPDO) */
 #define LSM_CO_OD_RW 0x03u
-#define LSM_CO_OD_CONST 0x04u   /* read-only constant: the value is entry.arg (numeric, <= 32 bits) */
-#define LSM_CO_OD_TPDO 0x08u    /* may be mapped into a TPDO (needs R) */
-#define LSM_CO_OD_RPDO 0x10u    /* may be mapped into an RPDO (needs W) */
-#define LSM_CO_OD_HOOK 0x20u    /* writes go to the write hook, which validates and stores */
-#define LSM_CO_OD_STRPTR 0x40u  /* VISIBLE_STRING: the storage holds a `const char *` (NUL-terminated, may be NULL) */
+#define LSM_CO_OD_CONST 0x04u  /* read-only constant: the value is entry.arg (numeric, <= 32 bits) */
+#define LSM_CO_OD_TPDO 0x08u   /* may be mapped into a TPDO (needs R) */
+#define LSM_CO_OD_RPDO 0x10u   /* may be mapped into an RPDO (needs W) */
+#define LSM_CO_OD_HOOK 0x20u   /* writes go to the write hook, which validates and stores */
+#define LSM_CO_OD_STRPTR 0x40u /* VISIBLE_STRING: the storage holds a `const char *` (NUL-terminated, may be NULL) */
 
 /* Number of instance groups including group 0 (single objects). */
 #define LSM_CO_OD_GROUPS 4
 
 /* CiA 301 SDO abort codes (0 = success). Every code the layer can produce is listed here. */
 #define LSM_CO_ABORT_NONE 0x00000000u
-#define LSM_CO_ABORT_TOGGLE 0x05030000u          /* toggle bit not alternated */
-#define LSM_CO_ABORT_TIMEOUT 0x05040000u         /* SDO protocol timed out */
-#define LSM_CO_ABORT_CMD 0x05040001u             /* client/server command specifier not valid or unknown */
-#define LSM_CO_ABORT_NO_MEM 0x05040005u          /* out of memory (object larger than the SDO buffer) */
-#define LSM_CO_ABORT_UNSUPPORTED 0x06010000u     /* unsupported access to an object */
-#define LSM_CO_ABORT_WRITE_ONLY 0x06010001u      /* attempt to read a write-only object */
-#define LSM_CO_ABORT_READ_ONLY 0x06010002u       /* attempt to write a read-only object */
-#define LSM_CO_ABORT_NO_OBJECT 0x06020000u       /* object does not exist in the object dictionary */
-#define LSM_CO_ABORT_NOT_MAPPABLE 0x06040041u    /* object cannot be mapped to the PDO */
-#define LSM_CO_ABORT_PDO_LENGTH 0x06040042u      /* number and length of mapped objects exceed the PDO length */
-#define LSM_CO_ABORT_PARAM_INCOMPAT 0x06040043u  /* general parameter incompatibility */
-#define LSM_CO_ABORT_LENGTH 0x06070010u          /* data type does not match, length of service parameter does not match */
-#define LSM_CO_ABORT_LENGTH_HIGH 0x06070012u     /* ... length of service parameter too high */
-#define LSM_CO_ABORT_LENGTH_LOW 0x06070013u      /* ... length of service parameter too low */
-#define LSM_CO_ABORT_NO_SUB 0x06090011u          /* sub-index does not exist */
-#define LSM_CO_ABORT_VALUE 0x06090030u           /* invalid value for parameter (download only) */
-#define LSM_CO_ABORT_VALUE_HIGH 0x06090031u      /* value of parameter written too high */
-#define LSM_CO_ABORT_VALUE_LOW 0x06090032u       /* value of parameter written too low */
-#define LSM_CO_ABORT_GENERAL 0x08000000u         /* general error */
-#define LSM_CO_ABORT_STORE 0x08000020u           /* data cannot be transferred or stored to the application */
-#define LSM_CO_ABORT_DEVICE_STATE 0x08000022u    /* ... because of the present device state */
+#define LSM_CO_ABORT_TOGGLE 0x05030000u         /* toggle bit not alternated */
+#define LSM_CO_ABORT_TIMEOUT 0x05040000u        /* SDO protocol timed out */
+#define LSM_CO_ABORT_CMD 0x05040001u            /* client/server command specifier not valid or unknown */
+#define LSM_CO_ABORT_NO_MEM 0x05040005u         /* out of memory (object larger than the SDO buffer) */
+#define LSM_CO_ABORT_UNSUPPORTED 0x06010000u    /* unsupported access to an object */
+#define LSM_CO_ABORT_WRITE_ONLY 0x06010001u     /* attempt to read a write-only object */
+#define LSM_CO_ABORT_READ_ONLY 0x06010002u      /* attempt to write a read-only object */
+#define LSM_CO_ABORT_NO_OBJECT 0x06020000u      /* object does not exist in the object dictionary */
+#define LSM_CO_ABORT_NOT_MAPPABLE 0x06040041u   /* object cannot be mapped to the PDO */
+#define LSM_CO_ABORT_PDO_LENGTH 0x06040042u     /* number and length of mapped objects exceed the PDO length */
+#define LSM_CO_ABORT_PARAM_INCOMPAT 0x06040043u /* general parameter incompatibility */
+#define LSM_CO_ABORT_LENGTH 0x06070010u       /* data type does not match, length of service parameter does not match */
+#define LSM_CO_ABORT_LENGTH_HIGH 0x06070012u  /* ... length of service parameter too high */
+#define LSM_CO_ABORT_LENGTH_LOW 0x06070013u   /* ... length of service parameter too low */
+#define LSM_CO_ABORT_NO_SUB 0x06090011u       /* sub-index does not exist */
+#define LSM_CO_ABORT_VALUE 0x06090030u        /* invalid value for parameter (download only) */
+#define LSM_CO_ABORT_VALUE_HIGH 0x06090031u   /* value of parameter written too high */
+#define LSM_CO_ABORT_VALUE_LOW 0x06090032u    /* value of parameter written too low */
+#define LSM_CO_ABORT_GENERAL 0x08000000u      /* general error */
+#define LSM_CO_ABORT_STORE 0x08000020u        /* data cannot be transferred or stored to the application */
+#define LSM_CO_ABORT_DEVICE_STATE 0x08000022u /* ... because of the present device state */
 
 /* One object (index, sub-index). 12 bytes; tables are meant to be static const. */
 typedef struct lsm_co_od_entry {
-    uint16_t index;   /* index of instance 0 */
-    uint8_t sub;      /* sub-index */
-    uint8_t type;     /* lsm_co_type */
-    uint8_t flags;    /* LSM_CO_OD_* */
-    uint8_t group;    /* 0 = single object, 1..3 = instance group */
-    uint8_t range;    /* 0 = no range check, else index into the range table */
-    uint8_t size;     /* bytes: the type's size; for strings and domains the maximum length (1..255) */
-    uint32_t arg;     /* byte offset of instance 0's value from the base; for CONST the value itself */
+    uint16_t index; /* index of instance 0 */
+    uint8_t sub;    /* sub-index */
+    uint8_t type;   /* lsm_co_type */
+    uint8_t flags;  /* LSM_CO_OD_* */
+    uint8_t group;  /* 0 = single object, 1..3 = instance group */
+    uint8_t range;  /* 0 = no range check, else index into the range table */
+    uint8_t size;   /* bytes: the type's size; for strings and domains the maximum length (1..255) */
+    uint32_t arg;   /* byte offset of instance 0's value from the base; for CONST the value itself */
 } lsm_co_od_entry;
 
 /* Inclusive value range of numeric entries (UNSIGNED64 values compare as unsigned; then min >= 0). */
@@ -110,10 +110,10 @@ typedef struct lsm_co_od_group {
 /* A resolved object: the entry, the instance, and where its value lives. */
 typedef struct lsm_co_od_ref {
     const lsm_co_od_entry *entry;
-    void *ptr;       /* storage of this instance; NULL for CONST entries */
-    uint16_t index;  /* index as addressed */
+    void *ptr;      /* storage of this instance; NULL for CONST entries */
+    uint16_t index; /* index as addressed */
     uint8_t sub;
-    uint8_t inst;    /* instance number within the entry's group (0 for group 0) */
+    uint8_t inst; /* instance number within the entry's group (0 for group 0) */
 } lsm_co_od_ref;
 
 /*
@@ -126,14 +126,15 @@ typedef uint32_t (*lsm_co_od_write_fn)(void *ctx, const lsm_co_od_ref *ref, cons
                                        int64_t value);
 
 typedef struct lsm_co_od_config {
-    const lsm_co_od_entry *table;   /* the entries, any order */
+    const lsm_co_od_entry *table; /* the entries, any order */
     size_t n_entries;
-    const lsm_co_od_range *ranges;  /* range table; ranges[0] is unused (range 0 = none); may be NULL if no entry has a range */
+    const lsm_co_od_range
+        *ranges; /* range table; ranges[0] is unused (range 0 = none); may be NULL if no entry has a range */
     size_t n_ranges;
     lsm_co_od_group groups[LSM_CO_OD_GROUPS]; /* groups[0] unused */
-    void *base;                     /* the object whose bytes the offsets address */
-    size_t base_size;               /* sizeof(*base): every value must lie inside */
-    lsm_co_od_write_fn write_hook;  /* required if any entry has LSM_CO_OD_HOOK, else may be NULL */
+    void *base;                               /* the object whose bytes the offsets address */
+    size_t base_size;                         /* sizeof(*base): every value must lie inside */
+    lsm_co_od_write_fn write_hook;            /* required if any entry has LSM_CO_OD_HOOK, else may be NULL */
     void *hook_ctx;
 } lsm_co_od_config;
 

@@ -29,9 +29,18 @@ lsm_status lsm_co_path_init(lsm_co_path *p, lsm_co_path_block *storage, size_t c
 static void plane_axes(uint8_t plane, uint8_t *a, uint8_t *b)
 {
     switch (plane) {
-    case 1: *a = 2u; *b = 0u; break; /* ZX */
-    case 2: *a = 1u; *b = 2u; break; /* YZ */
-    default: *a = 0u; *b = 1u; break; /* XY */
+    case 1:
+        *a = 2u;
+        *b = 0u;
+        break; /* ZX */
+    case 2:
+        *a = 1u;
+        *b = 2u;
+        break; /* YZ */
+    default:
+        *a = 0u;
+        *b = 1u;
+        break; /* XY */
     }
 }
 

@@ -83,29 +83,29 @@ typedef enum lsm_co_path_cmd {
 
 /* What the application's planner must do. */
 typedef enum lsm_co_path_motion {
-    LSM_CO_PATH_MOTION_IDLE = 0,  /* no path motion */
-    LSM_CO_PATH_MOTION_RUN = 1,   /* run the blocks, feed scaled by the override */
-    LSM_CO_PATH_MOTION_HOLD = 2,  /* feed hold: decelerate along the path with the planner's limits, resumable */
-    LSM_CO_PATH_MOTION_QUICK = 3  /* stop along the path as fast as jerk-limited motion allows (fault, clear) */
+    LSM_CO_PATH_MOTION_IDLE = 0, /* no path motion */
+    LSM_CO_PATH_MOTION_RUN = 1,  /* run the blocks, feed scaled by the override */
+    LSM_CO_PATH_MOTION_HOLD = 2, /* feed hold: decelerate along the path with the planner's limits, resumable */
+    LSM_CO_PATH_MOTION_QUICK = 3 /* stop along the path as fast as jerk-limited motion allows (fault, clear) */
 } lsm_co_path_motion;
 
 /* A decoded block. */
 typedef struct lsm_co_path_block {
     uint32_t seq;
-    uint32_t feed_um_s;          /* µm/s */
-    uint32_t tol_um;             /* µm */
-    int32_t end[LSM_MAX_AXES];   /* counts, absolute */
-    int32_t centre[2];           /* counts, arcs only */
-    uint8_t type;                /* lsm_co_path_type */
-    uint8_t plane;               /* 0 XY, 1 ZX, 2 YZ */
+    uint32_t feed_um_s;        /* µm/s */
+    uint32_t tol_um;           /* µm */
+    int32_t end[LSM_MAX_AXES]; /* counts, absolute */
+    int32_t centre[2];         /* counts, arcs only */
+    uint8_t type;              /* lsm_co_path_type */
+    uint8_t plane;             /* 0 XY, 1 ZX, 2 YZ */
 } lsm_co_path_block;
 
 /* What the application reports each cycle. */
 typedef struct lsm_co_path_report {
-    uint32_t active_seq;  /* block being executed (0x5005) */
-    uint32_t feed_um_s;   /* present path feed (0x5006) */
-    bool standstill;      /* path motion at rest */
-    bool starved;         /* the planner is stopping or stopped for lack of blocks */
+    uint32_t active_seq; /* block being executed (0x5005) */
+    uint32_t feed_um_s;  /* present path feed (0x5006) */
+    bool standstill;     /* path motion at rest */
+    bool starved;        /* the planner is stopping or stopped for lack of blocks */
 } lsm_co_path_report;
 
 typedef struct lsm_co_path {
@@ -113,24 +113,24 @@ typedef struct lsm_co_path {
     uint16_t cap, head, count;
     uint8_t n_axes;
     /* object values */
-    uint8_t command;          /* 0x5000: last command accepted */
-    uint8_t override_pct;     /* 0x5001 */
-    uint8_t state;            /* 0x5002 */
-    uint16_t free_slots;      /* 0x5003 */
-    uint32_t last_seq;        /* 0x5004 */
-    uint32_t active_seq;      /* 0x5005 */
-    uint32_t feed_um_s;       /* 0x5006 */
-    uint16_t capacity;        /* 0x5007 */
-    uint16_t n_dup;           /* 0x5008 sub 1 */
-    uint16_t n_gap;           /* 0x5008 sub 2 */
-    uint16_t n_refused;       /* 0x5008 sub 3 */
-    uint16_t n_underrun;      /* 0x5008 sub 4 */
+    uint8_t command;      /* 0x5000: last command accepted */
+    uint8_t override_pct; /* 0x5001 */
+    uint8_t state;        /* 0x5002 */
+    uint16_t free_slots;  /* 0x5003 */
+    uint32_t last_seq;    /* 0x5004 */
+    uint32_t active_seq;  /* 0x5005 */
+    uint32_t feed_um_s;   /* 0x5006 */
+    uint16_t capacity;    /* 0x5007 */
+    uint16_t n_dup;       /* 0x5008 sub 1 */
+    uint16_t n_gap;       /* 0x5008 sub 2 */
+    uint16_t n_refused;   /* 0x5008 sub 3 */
+    uint16_t n_underrun;  /* 0x5008 sub 4 */
     /* runtime */
-    bool quick;               /* HOLDING/STOPPING is a quick stop */
+    bool quick; /* HOLDING/STOPPING is a quick stop */
     bool standstill;
     bool starved;
     bool have_prev;
-    bool reject_pending;      /* the planner refused a block: the node sends EMCY 0xFF01 */
+    bool reject_pending; /* the planner refused a block: the node sends EMCY 0xFF01 */
     uint32_t reject_seq;
     uint16_t epoch;
     int32_t prev_end[LSM_MAX_AXES];

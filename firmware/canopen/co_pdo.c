@@ -191,8 +191,8 @@ uint32_t lsm_co_pdo_write_sync_id(lsm_co_pdo *pdo, uint32_t value)
     return LSM_CO_ABORT_NONE;
 }
 
-lsm_status lsm_co_pdo_configure(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t trans_type, const uint32_t *maps,
-                                size_t n, bool valid_now)
+lsm_status lsm_co_pdo_configure(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t trans_type, const uint32_t *maps, size_t n,
+                                bool valid_now)
 {
     lsm_co_pdo_chan *c = chan(pdo, tx, k);
     if (c == NULL || n > LSM_CO_PDO_MAX_MAP || !trans_type_ok(trans_type) || (n != 0u && maps == NULL))

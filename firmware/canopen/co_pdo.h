@@ -41,25 +41,25 @@
 
 /* Compile-time settings (LSM_CO_N_RPDO, LSM_CO_N_TPDO, LSM_CO_PDO_MAX_MAP): lsm_config.h. */
 
-#define LSM_CO_PDO_INVALID 0x80000000u  /* COB-ID bit 31: the PDO does not exist */
-#define LSM_CO_PDO_NO_RTR 0x40000000u   /* COB-ID bit 30: no RTR allowed (always so here) */
-#define LSM_CO_PDO_EXT 0x20000000u      /* COB-ID bit 29: 29-bit id (refused) */
+#define LSM_CO_PDO_INVALID 0x80000000u /* COB-ID bit 31: the PDO does not exist */
+#define LSM_CO_PDO_NO_RTR 0x40000000u  /* COB-ID bit 30: no RTR allowed (always so here) */
+#define LSM_CO_PDO_EXT 0x20000000u     /* COB-ID bit 29: 29-bit id (refused) */
 
 typedef struct lsm_co_pdo_chan {
-    uint32_t cob_id;           /* sub 1 */
-    uint8_t trans_type;        /* sub 2 */
-    uint8_t n_map;             /* mapping sub 0 */
-    uint8_t dlc;               /* bytes of the current mapping */
-    uint8_t sync_count;        /* TPDO: SYNCs since the last transmission */
-    uint16_t inhibit_100us;    /* TPDO sub 3 */
-    uint16_t event_ms;         /* sub 5 (TPDO event timer) */
-    uint32_t map[LSM_CO_PDO_MAX_MAP];        /* mapping sub 1.. */
-    uint16_t map_entry[LSM_CO_PDO_MAX_MAP];  /* resolved: table entry number */
-    uint8_t map_inst[LSM_CO_PDO_MAX_MAP];    /* resolved: instance */
-    uint8_t buf[8];            /* RPDO: data waiting for SYNC; TPDO: data of the last transmission */
-    bool pending;              /* RPDO: buf waits for SYNC */
-    bool sent_once;            /* TPDO: buf is valid */
-    bool len_err;              /* RPDO: a length EMCY was sent and not yet followed by a good frame */
+    uint32_t cob_id;                        /* sub 1 */
+    uint8_t trans_type;                     /* sub 2 */
+    uint8_t n_map;                          /* mapping sub 0 */
+    uint8_t dlc;                            /* bytes of the current mapping */
+    uint8_t sync_count;                     /* TPDO: SYNCs since the last transmission */
+    uint16_t inhibit_100us;                 /* TPDO sub 3 */
+    uint16_t event_ms;                      /* sub 5 (TPDO event timer) */
+    uint32_t map[LSM_CO_PDO_MAX_MAP];       /* mapping sub 1.. */
+    uint16_t map_entry[LSM_CO_PDO_MAX_MAP]; /* resolved: table entry number */
+    uint8_t map_inst[LSM_CO_PDO_MAX_MAP];   /* resolved: instance */
+    uint8_t buf[8];                         /* RPDO: data waiting for SYNC; TPDO: data of the last transmission */
+    bool pending;                           /* RPDO: buf waits for SYNC */
+    bool sent_once;                         /* TPDO: buf is valid */
+    bool len_err;                           /* RPDO: a length EMCY was sent and not yet followed by a good frame */
     uint32_t inhibit_until_us;
     uint32_t event_due_us;
 } lsm_co_pdo_chan;
@@ -67,9 +67,9 @@ typedef struct lsm_co_pdo_chan {
 /* What an RPDO reception produced, for the node's EMCY. */
 typedef enum lsm_co_pdo_rx_result {
     LSM_CO_PDO_RX_OK = 0,
-    LSM_CO_PDO_RX_SHORT = 1,    /* not processed: send EMCY 0x8210 */
-    LSM_CO_PDO_RX_LONG = 2,     /* processed: send EMCY 0x8220 */
-    LSM_CO_PDO_RX_QUIET = 3     /* a length error already reported: nothing to send */
+    LSM_CO_PDO_RX_SHORT = 1, /* not processed: send EMCY 0x8210 */
+    LSM_CO_PDO_RX_LONG = 2,  /* processed: send EMCY 0x8220 */
+    LSM_CO_PDO_RX_QUIET = 3  /* a length error already reported: nothing to send */
 } lsm_co_pdo_rx_result;
 
 typedef struct lsm_co_pdo {
@@ -92,8 +92,8 @@ lsm_status lsm_co_pdo_init(lsm_co_pdo *pdo, lsm_co_od *od, uint8_t node_id);
  * the transmission type, and whether it is valid with its default COB-ID. Goes through the same checks as the
  * SDO procedure. Errors: LSM_E_ARG (k, n or type out of range), LSM_E_CO_MAPPING (an entry is refused).
  */
-lsm_status lsm_co_pdo_configure(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t trans_type, const uint32_t *maps,
-                                size_t n, bool valid);
+lsm_status lsm_co_pdo_configure(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t trans_type, const uint32_t *maps, size_t n,
+                                bool valid);
 
 /* OD hook parts: communication record (sub 1, 2, 3, 5), mapping record (sub 0..8), 0x1005. Abort or 0. */
 uint32_t lsm_co_pdo_write_comm(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t sub, uint32_t value, uint32_t now_us);

@@ -198,8 +198,7 @@ lsm_status lsm_co_sdo_rx(lsm_co_sdo *sdo, const lsm_can_frame *f, uint32_t now_u
     case 4:
         sdo->phase = LSM_CO_SDO_IDLE; /* abort from the client: drop, no answer */
         return LSM_OK;
-    default:
-        return send_abort(sdo, lsm_can_get_u16(&r[1]), r[3], LSM_CO_ABORT_CMD, txq);
+    default: return send_abort(sdo, lsm_can_get_u16(&r[1]), r[3], LSM_CO_ABORT_CMD, txq);
     }
 }
 

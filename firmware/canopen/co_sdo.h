@@ -37,27 +37,27 @@
 
 typedef enum lsm_co_sdo_phase {
     LSM_CO_SDO_IDLE = 0,
-    LSM_CO_SDO_DOWNLOAD = 1,  /* segmented download open */
-    LSM_CO_SDO_UPLOAD = 2     /* segmented upload open */
+    LSM_CO_SDO_DOWNLOAD = 1, /* segmented download open */
+    LSM_CO_SDO_UPLOAD = 2    /* segmented upload open */
 } lsm_co_sdo_phase;
 
 typedef struct lsm_co_sdo {
     lsm_co_od *od;
-    uint8_t *buf;          /* caller storage for segmented transfers */
-    uint16_t cap;          /* its size in bytes (>= 8) */
-    uint16_t rx_id;        /* 0x600 + node id */
-    uint16_t tx_id;        /* 0x580 + node id */
-    uint8_t phase;         /* lsm_co_sdo_phase */
-    uint8_t toggle;        /* expected toggle bit (0 or 0x10) */
-    bool size_known;       /* download: the client announced the size */
-    lsm_co_od_ref ref;     /* object of the open transfer */
-    uint32_t size;         /* download: announced size; upload: total bytes */
-    uint16_t pos;          /* bytes received (download) or sent (upload) */
-    uint32_t deadline_us;  /* the open transfer aborts when now passes it */
+    uint8_t *buf;         /* caller storage for segmented transfers */
+    uint16_t cap;         /* its size in bytes (>= 8) */
+    uint16_t rx_id;       /* 0x600 + node id */
+    uint16_t tx_id;       /* 0x580 + node id */
+    uint8_t phase;        /* lsm_co_sdo_phase */
+    uint8_t toggle;       /* expected toggle bit (0 or 0x10) */
+    bool size_known;      /* download: the client announced the size */
+    lsm_co_od_ref ref;    /* object of the open transfer */
+    uint32_t size;        /* download: announced size; upload: total bytes */
+    uint16_t pos;         /* bytes received (download) or sent (upload) */
+    uint32_t deadline_us; /* the open transfer aborts when now passes it */
     uint32_t timeout_us;
-    uint32_t malformed;    /* request frames with DLC != 8 (wraps) */
-    uint32_t aborts_sent;  /* abort frames sent (wraps) */
-    uint32_t last_abort;   /* code of the last abort sent, 0 if none yet */
+    uint32_t malformed;   /* request frames with DLC != 8 (wraps) */
+    uint32_t aborts_sent; /* abort frames sent (wraps) */
+    uint32_t last_abort;  /* code of the last abort sent, 0 if none yet */
 } lsm_co_sdo;
 
 /*

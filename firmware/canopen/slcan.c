@@ -141,8 +141,7 @@ static void command(lsm_slcan *s, const char *l, unsigned len, char *reply)
         if (len != 9u || !parse_hex(l + 1, 8u, &v))
             return;
         break;
-    default:
-        return;
+    default: return;
     }
     put_reply(reply, cr);
 }

@@ -37,9 +37,9 @@
 
 #include "can.h"
 
-#define LSM_SLCAN_LINE_MAX 32u    /* longest command line kept ("T" + 8 + 1 + 16 = 26 characters, + slack) */
-#define LSM_SLCAN_REPLY_MAX 8u    /* longest reply to a command, CR included ("V1013" CR is 6) */
-#define LSM_SLCAN_FRAME_MAX 27u   /* longest frame line sent up, CR included ("T" + 8 + 1 + 16 + CR) */
+#define LSM_SLCAN_LINE_MAX 32u  /* longest command line kept ("T" + 8 + 1 + 16 = 26 characters, + slack) */
+#define LSM_SLCAN_REPLY_MAX 8u  /* longest reply to a command, CR included ("V1013" CR is 6) */
+#define LSM_SLCAN_FRAME_MAX 27u /* longest frame line sent up, CR included ("T" + 8 + 1 + 16 + CR) */
 #define LSM_SLCAN_CR '\r'
 #define LSM_SLCAN_BEL '\a'
 
@@ -49,21 +49,21 @@
 #define LSM_SLCAN_F_OVERRUN 0x08u
 
 typedef struct lsm_slcan {
-    char line[LSM_SLCAN_LINE_MAX];  /* the command line being received (without its CR) */
-    uint8_t len;                    /* characters in line */
-    bool overlong;                  /* the present line is longer than LSM_SLCAN_LINE_MAX: refused at its CR */
-    bool open;                      /* O or L received (and no C since) */
-    bool listen_only;               /* opened with L */
-    uint8_t bitrate_code;           /* last Sn (0..8), 0xFF after an s command; 8 (1 Mbit/s) at init */
-    uint8_t status_flags;           /* LSM_SLCAN_F_*, set by the board, reported and cleared by F */
-    uint32_t refused;               /* lines answered with BEL (wraps) */
-    uint32_t frames_down;           /* frames taken from the host (wraps) */
+    char line[LSM_SLCAN_LINE_MAX]; /* the command line being received (without its CR) */
+    uint8_t len;                   /* characters in line */
+    bool overlong;                 /* the present line is longer than LSM_SLCAN_LINE_MAX: refused at its CR */
+    bool open;                     /* O or L received (and no C since) */
+    bool listen_only;              /* opened with L */
+    uint8_t bitrate_code;          /* last Sn (0..8), 0xFF after an s command; 8 (1 Mbit/s) at init */
+    uint8_t status_flags;          /* LSM_SLCAN_F_*, set by the board, reported and cleared by F */
+    uint32_t refused;              /* lines answered with BEL (wraps) */
+    uint32_t frames_down;          /* frames taken from the host (wraps) */
 } lsm_slcan;
 
 typedef enum lsm_slcan_event {
-    LSM_SLCAN_EV_NONE = 0,   /* nothing complete yet (the character was stored) */
-    LSM_SLCAN_EV_REPLY = 1,  /* a command line ended: send the reply */
-    LSM_SLCAN_EV_FRAME = 2   /* a t/T/r/R line ended: *frame goes to the bus, and send the reply */
+    LSM_SLCAN_EV_NONE = 0,  /* nothing complete yet (the character was stored) */
+    LSM_SLCAN_EV_REPLY = 1, /* a command line ended: send the reply */
+    LSM_SLCAN_EV_FRAME = 2  /* a t/T/r/R line ended: *frame goes to the bus, and send the reply */
 } lsm_slcan_event;
 
 /* Closed channel, 1 Mbit/s, no line. Errors: LSM_E_NULL. Any context (before use). */

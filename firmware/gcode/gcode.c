@@ -56,40 +56,70 @@ typedef struct {
 } gc_unsup;
 
 static const gc_unsup k_unsup_g[] = {
-    {50, "unsupported: splines (G5)"},          {51, "unsupported: splines (G5.1)"},
-    {52, "unsupported: NURBS (G5.2)"},          {70, "unsupported: lathe diameter mode"},
-    {80, "unsupported: lathe radius mode"},     {330, "unsupported: spindle-synchronized motion"},
-    {331, "unsupported: rigid tapping"},        {382, "unsupported: probing"},
-    {383, "unsupported: probing"},              {384, "unsupported: probing"},
-    {385, "unsupported: probing"},              {410, "unsupported: cutter compensation"},
-    {411, "unsupported: cutter compensation"},  {420, "unsupported: cutter compensation"},
-    {421, "unsupported: cutter compensation"},  {431, "unsupported: dynamic tool length offset"},
-    {432, "unsupported: additive tool length offset"}, {520, "unsupported: local offsets (G52)"},
-    {591, "unsupported: coordinate systems G59.1-G59.3"}, {592, "unsupported: coordinate systems G59.1-G59.3"},
-    {593, "unsupported: coordinate systems G59.1-G59.3"}, {730, "unsupported: canned cycles"},
-    {760, "unsupported: threading cycle"},      {810, "unsupported: canned cycles"},
-    {820, "unsupported: canned cycles"},        {830, "unsupported: canned cycles"},
-    {840, "unsupported: canned cycles"},        {850, "unsupported: canned cycles"},
-    {860, "unsupported: canned cycles"},        {870, "unsupported: canned cycles"},
-    {880, "unsupported: canned cycles"},        {890, "unsupported: canned cycles"},
-    {923, "unsupported: restoring G92 offsets (G92.3)"}, {930, "unsupported: inverse-time feed"},
-    {950, "unsupported: feed per revolution"},  {960, "unsupported: constant surface speed"},
-    {970, "unsupported: constant surface speed"}, {980, "unsupported: canned cycle return mode"},
+    {50, "unsupported: splines (G5)"},
+    {51, "unsupported: splines (G5.1)"},
+    {52, "unsupported: NURBS (G5.2)"},
+    {70, "unsupported: lathe diameter mode"},
+    {80, "unsupported: lathe radius mode"},
+    {330, "unsupported: spindle-synchronized motion"},
+    {331, "unsupported: rigid tapping"},
+    {382, "unsupported: probing"},
+    {383, "unsupported: probing"},
+    {384, "unsupported: probing"},
+    {385, "unsupported: probing"},
+    {410, "unsupported: cutter compensation"},
+    {411, "unsupported: cutter compensation"},
+    {420, "unsupported: cutter compensation"},
+    {421, "unsupported: cutter compensation"},
+    {431, "unsupported: dynamic tool length offset"},
+    {432, "unsupported: additive tool length offset"},
+    {520, "unsupported: local offsets (G52)"},
+    {591, "unsupported: coordinate systems G59.1-G59.3"},
+    {592, "unsupported: coordinate systems G59.1-G59.3"},
+    {593, "unsupported: coordinate systems G59.1-G59.3"},
+    {730, "unsupported: canned cycles"},
+    {760, "unsupported: threading cycle"},
+    {810, "unsupported: canned cycles"},
+    {820, "unsupported: canned cycles"},
+    {830, "unsupported: canned cycles"},
+    {840, "unsupported: canned cycles"},
+    {850, "unsupported: canned cycles"},
+    {860, "unsupported: canned cycles"},
+    {870, "unsupported: canned cycles"},
+    {880, "unsupported: canned cycles"},
+    {890, "unsupported: canned cycles"},
+    {923, "unsupported: restoring G92 offsets (G92.3)"},
+    {930, "unsupported: inverse-time feed"},
+    {950, "unsupported: feed per revolution"},
+    {960, "unsupported: constant surface speed"},
+    {970, "unsupported: constant surface speed"},
+    {980, "unsupported: canned cycle return mode"},
     {990, "unsupported: canned cycle return mode"},
 };
 
 static const gc_unsup k_unsup_m[] = {
-    {190, "unsupported: spindle orientation"}, {480, "unsupported: override control"},
-    {490, "unsupported: override control"},    {500, "unsupported: override control"},
-    {510, "unsupported: override control"},    {520, "unsupported: override control"},
-    {530, "unsupported: override control"},    {600, "unsupported: pallet change"},
-    {610, "unsupported: setting the current tool (M61)"}, {620, "unsupported: digital outputs"},
-    {630, "unsupported: digital outputs"},     {640, "unsupported: digital outputs"},
-    {650, "unsupported: digital outputs"},     {660, "unsupported: waiting on inputs"},
-    {670, "unsupported: analog outputs"},      {680, "unsupported: analog outputs"},
-    {700, "unsupported: saving modal state"},  {710, "unsupported: saving modal state"},
-    {720, "unsupported: saving modal state"},  {730, "unsupported: saving modal state"},
-    {980, "unsupported: subroutines (M98)"},   {990, "unsupported: subroutines (M99)"},
+    {190, "unsupported: spindle orientation"},
+    {480, "unsupported: override control"},
+    {490, "unsupported: override control"},
+    {500, "unsupported: override control"},
+    {510, "unsupported: override control"},
+    {520, "unsupported: override control"},
+    {530, "unsupported: override control"},
+    {600, "unsupported: pallet change"},
+    {610, "unsupported: setting the current tool (M61)"},
+    {620, "unsupported: digital outputs"},
+    {630, "unsupported: digital outputs"},
+    {640, "unsupported: digital outputs"},
+    {650, "unsupported: digital outputs"},
+    {660, "unsupported: waiting on inputs"},
+    {670, "unsupported: analog outputs"},
+    {680, "unsupported: analog outputs"},
+    {700, "unsupported: saving modal state"},
+    {710, "unsupported: saving modal state"},
+    {720, "unsupported: saving modal state"},
+    {730, "unsupported: saving modal state"},
+    {980, "unsupported: subroutines (M98)"},
+    {990, "unsupported: subroutines (M99)"},
 };
 
 /* A parsed number: value plus its exact decimal form (for G/M/N/P integer checks). */
@@ -104,8 +134,8 @@ typedef struct {
 #define BIT(c) (1u << LETTER(c))
 #define AXIS_BITS (BIT('X') | BIT('Y') | BIT('Z') | BIT('A') | BIT('B') | BIT('C'))
 #define ARC_BITS (BIT('I') | BIT('J') | BIT('K') | BIT('R'))
-#define KNOWN_BITS                                                                                                   \
-    (BIT('G') | BIT('M') | BIT('N') | BIT('F') | AXIS_BITS | ARC_BITS | BIT('P') | BIT('S') | BIT('T') | BIT('H') |  \
+#define KNOWN_BITS                                                                                                  \
+    (BIT('G') | BIT('M') | BIT('N') | BIT('F') | AXIS_BITS | ARC_BITS | BIT('P') | BIT('S') | BIT('T') | BIT('H') | \
      BIT('L'))
 
 /* M words of a line, by LinuxCNC modal group. */
@@ -127,14 +157,18 @@ static const char k_axis_letters[LSM_GCODE_N_AXES] = {'X', 'Y', 'Z', 'A', 'B', '
 
 static lsm_real pow10_r(unsigned k)
 {
-    static const lsm_real k_pow10[GC_MAX_SIG_DIGITS + 1] = {
-        LSM_R(1e0),  LSM_R(1e1),  LSM_R(1e2),  LSM_R(1e3),  LSM_R(1e4),  LSM_R(1e5),  LSM_R(1e6),
-        LSM_R(1e7),  LSM_R(1e8),  LSM_R(1e9),  LSM_R(1e10), LSM_R(1e11), LSM_R(1e12), LSM_R(1e13),
-        LSM_R(1e14), LSM_R(1e15), LSM_R(1e16), LSM_R(1e17), LSM_R(1e18)};
+    static const lsm_real k_pow10[GC_MAX_SIG_DIGITS + 1] = {LSM_R(1e0),  LSM_R(1e1),  LSM_R(1e2),  LSM_R(1e3),
+                                                            LSM_R(1e4),  LSM_R(1e5),  LSM_R(1e6),  LSM_R(1e7),
+                                                            LSM_R(1e8),  LSM_R(1e9),  LSM_R(1e10), LSM_R(1e11),
+                                                            LSM_R(1e12), LSM_R(1e13), LSM_R(1e14), LSM_R(1e15),
+                                                            LSM_R(1e16), LSM_R(1e17), LSM_R(1e18)};
     return k_pow10[k];
 }
 
-static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+static bool is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r';
+}
 
 static uint32_t skip_blanks(const char *s, uint32_t n, uint32_t i)
 {
@@ -182,8 +216,7 @@ static lsm_status check_bytes(const char *s, uint32_t n, lsm_gcode_result *res)
 }
 
 /* Reads the number after a letter (blanks allowed anywhere inside, as in RS274/NGC). */
-static lsm_status read_number(const char *s, uint32_t n, uint32_t *pi, uint32_t col, gc_num *out,
-                              lsm_gcode_result *res)
+static lsm_status read_number(const char *s, uint32_t n, uint32_t *pi, uint32_t col, gc_num *out, lsm_gcode_result *res)
 {
     uint32_t i = skip_blanks(s, n, *pi);
     if (i < n && s[i] == '#')
@@ -310,9 +343,14 @@ static lsm_status scan_m(gc_words *w, int32_t code, uint32_t col, lsm_gcode_resu
 {
     int grp;
     switch (code) {
-    case 0: case 10: case 20: case 300: grp = MG_STOP; break;
+    case 0:
+    case 10:
+    case 20:
+    case 300: grp = MG_STOP; break;
     case 60: grp = MG_TOOL; break;
-    case 30: case 40: case 50: grp = MG_SPINDLE; break;
+    case 30:
+    case 40:
+    case 50: grp = MG_SPINDLE; break;
     case 70: grp = MG_MIST; break;
     case 80: grp = MG_FLOOD; break;
     case 90: grp = MG_COOL_OFF; break;
@@ -340,9 +378,12 @@ static const char *unsupported_char(char c)
     case '#': return "unsupported: parameters";
     case '[': return "unsupported: expressions";
     case '<': return "unsupported: named parameters";
-    case '@': case '^': return "unsupported: polar coordinates";
+    case '@':
+    case '^': return "unsupported: polar coordinates";
     case 'O': return "unsupported: O-words (subroutines, loops, conditionals)";
-    case 'U': case 'V': case 'W': return "unsupported: U V W axes";
+    case 'U':
+    case 'V':
+    case 'W': return "unsupported: U V W axes";
     case 'D': return "unsupported: cutter compensation (D)";
     default: return NULL;
     }
@@ -463,7 +504,10 @@ static uint32_t first_col(const gc_words *w, uint32_t mask)
     return best;
 }
 
-static lsm_real hypot_r(lsm_real a, lsm_real b) { return lsm_sqrt(a * a + b * b); }
+static lsm_real hypot_r(lsm_real a, lsm_real b)
+{
+    return lsm_sqrt(a * a + b * b);
+}
 
 /* Arc geometry in the plane (u, v) with normal w. */
 static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const lsm_real s[LSM_GCODE_N_AXES],
@@ -473,10 +517,31 @@ static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const ls
     int iu, iv, iw;
     char lu, lv, lbad; /* offset letters along u and v, and the one that is not allowed */
     switch (m->plane) {
-    case LSM_GCODE_PLANE_ZX: iu = LSM_GCODE_Z; iv = LSM_GCODE_X; iw = LSM_GCODE_Y; lu = 'K'; lv = 'I'; lbad = 'J'; break;
-    case LSM_GCODE_PLANE_YZ: iu = LSM_GCODE_Y; iv = LSM_GCODE_Z; iw = LSM_GCODE_X; lu = 'J'; lv = 'K'; lbad = 'I'; break;
+    case LSM_GCODE_PLANE_ZX:
+        iu = LSM_GCODE_Z;
+        iv = LSM_GCODE_X;
+        iw = LSM_GCODE_Y;
+        lu = 'K';
+        lv = 'I';
+        lbad = 'J';
+        break;
+    case LSM_GCODE_PLANE_YZ:
+        iu = LSM_GCODE_Y;
+        iv = LSM_GCODE_Z;
+        iw = LSM_GCODE_X;
+        lu = 'J';
+        lv = 'K';
+        lbad = 'I';
+        break;
     case LSM_GCODE_PLANE_XY:
-    default: iu = LSM_GCODE_X; iv = LSM_GCODE_Y; iw = LSM_GCODE_Z; lu = 'I'; lv = 'J'; lbad = 'K'; break;
+    default:
+        iu = LSM_GCODE_X;
+        iv = LSM_GCODE_Y;
+        iw = LSM_GCODE_Z;
+        lu = 'I';
+        lv = 'J';
+        lbad = 'K';
+        break;
     }
     const int dir = m->motion == LSM_GCODE_MOTION_CCW ? 1 : -1;
     const bool has_r = (w->seen & BIT('R')) != 0;
@@ -637,7 +702,10 @@ static lsm_status exec_functions(const gc_words *w, gc_exec *x, lsm_gcode_result
     if (w->m[MG_SPINDLE] >= 0) {
         const int16_t c = w->m[MG_SPINDLE];
         m->spindle = (uint8_t)(c / 10);
-        push_event(res, c == 30 ? LSM_GCODE_EV_SPINDLE_CW : c == 40 ? LSM_GCODE_EV_SPINDLE_CCW : LSM_GCODE_EV_SPINDLE_STOP,
+        push_event(res,
+                   c == 30   ? LSM_GCODE_EV_SPINDLE_CW
+                   : c == 40 ? LSM_GCODE_EV_SPINDLE_CCW
+                             : LSM_GCODE_EV_SPINDLE_STOP,
                    true, 0, c == 50 ? LSM_R(0.0) : m->speed_rpm);
     }
     if (w->m[MG_MIST] >= 0) {
@@ -858,12 +926,16 @@ static lsm_status exec_nonmodal(const lsm_gcode *p, const gc_words *w, gc_exec *
         return fail_r(res, LSM_E_GC_UNUSED_WORD, first_col(w, AXIS_BITS), "axis words with G28.1, G30.1 or G92.1");
     switch (nm) {
     case 100: return exec_g10(p, w, x, res);
-    case 920: case 921: case 922: return exec_g92(p, w, x, res);
-    case 281: case 301:
+    case 920:
+    case 921:
+    case 922: return exec_g92(p, w, x, res);
+    case 281:
+    case 301:
         for (int k = 0; k < LSM_GCODE_N_AXES; k++)
             x->o.home[nm == 301 ? 1 : 0][k] = p->pos[k];
         return LSM_OK;
-    case 280: case 300: {
+    case 280:
+    case 300: {
         lsm_status st = exec_end(p, w, x, false, res);
         if (st != LSM_OK)
             return st;
@@ -875,8 +947,7 @@ static lsm_status exec_nonmodal(const lsm_gcode *p, const gc_words *w, gc_exec *
 }
 
 /* The motion of the line (G0-G3 with the modal motion mode). */
-static lsm_status exec_motion(const lsm_gcode *p, const gc_words *w, gc_exec *x, uint32_t turns,
-                              lsm_gcode_result *res)
+static lsm_status exec_motion(const lsm_gcode *p, const gc_words *w, gc_exec *x, uint32_t turns, lsm_gcode_result *res)
 {
     const lsm_gcode_modal *m = &x->m;
     const bool explicit_motion = w->g[GRP_MOTION] >= 0;
@@ -1266,9 +1337,15 @@ lsm_status lsm_gcode_parse_line(lsm_gcode *p, const char *line, size_t len, lsm_
     return result_end(p, res, parse(p, line, (uint32_t)len, res));
 }
 
-const lsm_gcode_modal *lsm_gcode_modal_state(const lsm_gcode *p) { return p ? &p->modal : NULL; }
+const lsm_gcode_modal *lsm_gcode_modal_state(const lsm_gcode *p)
+{
+    return p ? &p->modal : NULL;
+}
 
-const lsm_real *lsm_gcode_position(const lsm_gcode *p) { return p ? p->pos : NULL; }
+const lsm_real *lsm_gcode_position(const lsm_gcode *p)
+{
+    return p ? p->pos : NULL;
+}
 
 /* Default reason of each error code (a stage may give a more precise one). */
 static const char *default_reason(lsm_status code)

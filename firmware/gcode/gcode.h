@@ -109,21 +109,21 @@ typedef enum lsm_gcode_blend {
 typedef struct lsm_gcode_modal {
     lsm_gcode_motion motion;
     lsm_gcode_plane plane;
-    lsm_gcode_units units;       /* units of the G-code input; the outputs are always mm */
+    lsm_gcode_units units; /* units of the G-code input; the outputs are always mm */
     lsm_gcode_distance distance;
     lsm_gcode_blend blend;
-    lsm_real blend_tol_mm;       /* G64 P converted to mm; 0 = no P given (use the machine default) */
-    lsm_real feed_mm_s;          /* last F, in mm/s; 0 until an F word is read */
-    lsm_real feed_rot_rad_s;     /* the same F read as deg/min (for rotary-only moves), in rad/s */
-    bool arc_absolute;           /* G90.1: I J K are absolute program coordinates (default G91.1) */
-    uint8_t wcs;                 /* work offset in use: 1 (G54) .. 6 (G59) */
-    uint8_t spindle;             /* 3 (M3), 4 (M4), 5 (M5: stopped, the state at start) */
-    bool mist, flood;            /* M7, M8 (M9 clears both) */
-    bool tool_length_on;         /* G43 in force (G49 at start) */
-    int32_t tool_length_h;       /* its H number (-1 without G43) */
-    int32_t tool_selected;       /* last T (-1: none yet) */
-    int32_t tool_loaded;         /* tool of the last M6 (0 at start: no tool) */
-    lsm_real speed_rpm;          /* last S (0 at start) */
+    lsm_real blend_tol_mm;   /* G64 P converted to mm; 0 = no P given (use the machine default) */
+    lsm_real feed_mm_s;      /* last F, in mm/s; 0 until an F word is read */
+    lsm_real feed_rot_rad_s; /* the same F read as deg/min (for rotary-only moves), in rad/s */
+    bool arc_absolute;       /* G90.1: I J K are absolute program coordinates (default G91.1) */
+    uint8_t wcs;             /* work offset in use: 1 (G54) .. 6 (G59) */
+    uint8_t spindle;         /* 3 (M3), 4 (M4), 5 (M5: stopped, the state at start) */
+    bool mist, flood;        /* M7, M8 (M9 clears both) */
+    bool tool_length_on;     /* G43 in force (G49 at start) */
+    int32_t tool_length_h;   /* its H number (-1 without G43) */
+    int32_t tool_selected;   /* last T (-1: none yet) */
+    int32_t tool_loaded;     /* tool of the last M6 (0 at start: no tool) */
+    lsm_real speed_rpm;      /* last S (0 at start) */
 } lsm_gcode_modal;
 
 /* Machine functions (see the header comment). */
@@ -147,17 +147,17 @@ typedef enum lsm_gcode_event_kind {
 
 typedef struct lsm_gcode_event {
     lsm_gcode_event_kind kind;
-    uint32_t line;        /* physical source line (1-based) */
-    uint8_t at_block;     /* motion blocks of this line that come before it */
-    bool exact_stop;      /* the machine must be at rest at the end of the motion before it */
-    int32_t tool;         /* T, H, or the M number of an end */
-    lsm_real value;       /* rpm (S, M3, M4) or seconds (G4) */
+    uint32_t line;    /* physical source line (1-based) */
+    uint8_t at_block; /* motion blocks of this line that come before it */
+    bool exact_stop;  /* the machine must be at rest at the end of the motion before it */
+    int32_t tool;     /* T, H, or the M number of an end */
+    lsm_real value;   /* rpm (S, M3, M4) or seconds (G4) */
 } lsm_gcode_event;
 
 typedef enum lsm_gcode_block_type {
-    LSM_GCODE_BLOCK_RAPID = 0,   /* G0: straight line at the machine's rapid rate (feed_mm_s = 0) */
-    LSM_GCODE_BLOCK_LINEAR,      /* G1: straight line at feed_mm_s */
-    LSM_GCODE_BLOCK_ARC          /* G2/G3: circular or helical arc at feed_mm_s */
+    LSM_GCODE_BLOCK_RAPID = 0, /* G0: straight line at the machine's rapid rate (feed_mm_s = 0) */
+    LSM_GCODE_BLOCK_LINEAR,    /* G1: straight line at feed_mm_s */
+    LSM_GCODE_BLOCK_ARC        /* G2/G3: circular or helical arc at feed_mm_s */
 } lsm_gcode_block_type;
 
 typedef struct lsm_gcode_block {
@@ -165,17 +165,17 @@ typedef struct lsm_gcode_block {
     uint32_t line;                    /* physical source line (1-based) */
     lsm_real start[LSM_GCODE_N_AXES]; /* X Y Z mm, A B C rad */
     lsm_real end[LSM_GCODE_N_AXES];
-    lsm_real feed_mm_s;               /* programmed feed (0 for rapids) */
-    lsm_real feed_rot_rad_s;          /* programmed F read as deg/min, in rad/s (0 for rapids) */
+    lsm_real feed_mm_s;      /* programmed feed (0 for rapids) */
+    lsm_real feed_rot_rad_s; /* programmed F read as deg/min, in rad/s (0 for rapids) */
     /* arcs only (zero otherwise): */
     lsm_gcode_plane plane;
-    int8_t dir;                       /* +1 counter-clockwise (G3), -1 clockwise (G2) about +normal */
-    uint32_t turns;                   /* additional full turns (P - 1) */
-    lsm_real centre[3];               /* X Y Z of the centre, mm; its normal coordinate = start's */
-    lsm_real radius_mm;               /* distance start-centre in the plane */
-    lsm_real radius_end_mm;           /* distance end-centre in the plane (within tolerance of radius_mm) */
-    lsm_real angle_rad;               /* swept angle > 0, including the full turns */
-    lsm_real helix_mm;                /* displacement along the plane normal (end - start) */
+    int8_t dir;             /* +1 counter-clockwise (G3), -1 clockwise (G2) about +normal */
+    uint32_t turns;         /* additional full turns (P - 1) */
+    lsm_real centre[3];     /* X Y Z of the centre, mm; its normal coordinate = start's */
+    lsm_real radius_mm;     /* distance start-centre in the plane */
+    lsm_real radius_end_mm; /* distance end-centre in the plane (within tolerance of radius_mm) */
+    lsm_real angle_rad;     /* swept angle > 0, including the full turns */
+    lsm_real helix_mm;      /* displacement along the plane normal (end - start) */
 } lsm_gcode_block;
 
 /* Where an error is (line and column are 1-based; column counts bytes). */
@@ -183,51 +183,51 @@ typedef struct lsm_gcode_error {
     lsm_status code;
     uint32_t line;
     uint32_t column;
-    const char *reason;   /* what is wrong, e.g. "unknown word", "unsupported: parameters" (static text) */
-    char word[24];        /* the offending word as written (blanks removed, letter upper case), e.g. "Q7"; a word
+    const char *reason; /* what is wrong, e.g. "unknown word", "unsupported: parameters" (static text) */
+    char word[24];      /* the offending word as written (blanks removed, letter upper case), e.g. "Q7"; a word
                              longer than 20 characters ends in "..." */
 } lsm_gcode_error;
 
 /* What one line produced. */
 typedef struct lsm_gcode_result {
-    bool complete;          /* a line was completed (feed/finish); always true from parse_line */
-    uint32_t line;          /* physical line number (1-based) */
-    lsm_status status;      /* LSM_OK or the error of this line */
-    lsm_gcode_error err;    /* valid when status != LSM_OK */
-    bool has_n;             /* the line had an N word ... */
-    uint32_t n;             /* ... with this value */
-    bool deleted;           /* skipped by block delete ('/' with the switch on) */
-    uint8_t n_blocks;       /* motion blocks produced (0 .. LSM_GCODE_MAX_BLOCKS) */
+    bool complete;       /* a line was completed (feed/finish); always true from parse_line */
+    uint32_t line;       /* physical line number (1-based) */
+    lsm_status status;   /* LSM_OK or the error of this line */
+    lsm_gcode_error err; /* valid when status != LSM_OK */
+    bool has_n;          /* the line had an N word ... */
+    uint32_t n;          /* ... with this value */
+    bool deleted;        /* skipped by block delete ('/' with the switch on) */
+    uint8_t n_blocks;    /* motion blocks produced (0 .. LSM_GCODE_MAX_BLOCKS) */
     lsm_gcode_block blocks[LSM_GCODE_MAX_BLOCKS];
-    uint8_t n_events;       /* machine-function events of the line, in execution order */
+    uint8_t n_events; /* machine-function events of the line, in execution order */
     lsm_gcode_event events[LSM_GCODE_MAX_EVENTS];
-    lsm_gcode_modal modal;  /* modal state after the line */
-    bool end_of_program;    /* M2, M30 or the closing '%' was read (on this or an earlier line) */
-    bool ignored;           /* a non-blank line after the end of the program (read and ignored) */
-    int16_t nonmodal;       /* the line's non-modal G code times ten (G4: 40, G28.1: 281, ...), -1 if none */
+    lsm_gcode_modal modal; /* modal state after the line */
+    bool end_of_program;   /* M2, M30 or the closing '%' was read (on this or an earlier line) */
+    bool ignored;          /* a non-blank line after the end of the program (read and ignored) */
+    int16_t nonmodal;      /* the line's non-modal G code times ten (G4: 40, G28.1: 281, ...), -1 if none */
 } lsm_gcode_result;
 
 typedef struct lsm_gcode_options {
-    uint8_t axis_mask;      /* bit k set: axis k (X=0 .. C=5) exists; words for others are errors */
-    bool block_delete;      /* the block-delete switch: skip lines that start with '/' */
-    lsm_gcode_units units;  /* units at program start (RS274/NGC leaves it to the machine) */
-    bool optional_stop;     /* the optional-stop switch: M1 pauses when set (default), is ignored otherwise */
+    uint8_t axis_mask;     /* bit k set: axis k (X=0 .. C=5) exists; words for others are errors */
+    bool block_delete;     /* the block-delete switch: skip lines that start with '/' */
+    lsm_gcode_units units; /* units at program start (RS274/NGC leaves it to the machine) */
+    bool optional_stop;    /* the optional-stop switch: M1 pauses when set (default), is ignored otherwise */
 } lsm_gcode_options;
 
 /* Parser state: caller-owned, initialise with lsm_gcode_init. Fields are private. */
 typedef struct lsm_gcode {
     lsm_gcode_options opt;
     lsm_gcode_modal modal;
-    lsm_real pos[LSM_GCODE_N_AXES]; /* current position in machine coordinates, mm / rad */
+    lsm_real pos[LSM_GCODE_N_AXES];                  /* current position in machine coordinates, mm / rad */
     lsm_real wcs[LSM_GCODE_N_WCS][LSM_GCODE_N_AXES]; /* G54..G59 origins (machine coordinates) */
-    lsm_real g92[LSM_GCODE_N_AXES]; /* G92 offset */
-    lsm_real home[2][LSM_GCODE_N_AXES]; /* G28 and G30 positions (machine coordinates) */
-    uint32_t line_no;               /* lines completed so far */
+    lsm_real g92[LSM_GCODE_N_AXES];                  /* G92 offset */
+    lsm_real home[2][LSM_GCODE_N_AXES];              /* G28 and G30 positions (machine coordinates) */
+    uint32_t line_no;                                /* lines completed so far */
     bool ended;
     bool percent_open;
-    bool seen_content;              /* a non-blank line was seen (for the opening '%') */
-    bool overflow;                  /* the current line exceeded LSM_GCODE_MAX_LINE */
-    bool pending;                   /* bytes of an unfinished line are buffered */
+    bool seen_content; /* a non-blank line was seen (for the opening '%') */
+    bool overflow;     /* the current line exceeded LSM_GCODE_MAX_LINE */
+    bool pending;      /* bytes of an unfinished line are buffered */
     uint16_t len;
     char buf[LSM_GCODE_MAX_LINE + 1]; /* +1: room for the '\r' of a full-length line */
 } lsm_gcode;

@@ -239,14 +239,8 @@ static void step_stop(lsm_axprof *p)
 bool lsm_axprof_step(lsm_axprof *p)
 {
     switch (p->mode) {
-    case LSM_AXPROF_MOVE:
-        step_move(p);
-        return true;
-    case LSM_AXPROF_STOP:
-        step_stop(p);
-        return true;
-    default:
-        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
-        return false;
+    case LSM_AXPROF_MOVE: step_move(p); return true;
+    case LSM_AXPROF_STOP: step_stop(p); return true;
+    default: p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0; return false;
     }
 }

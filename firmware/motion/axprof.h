@@ -44,37 +44,37 @@
 #include "stepgen.h"
 
 typedef enum lsm_axprof_mode {
-    LSM_AXPROF_IDLE = 0,   /* at rest (or moved by the caller: CSP, path) */
-    LSM_AXPROF_MOVE = 1,   /* running a planned move */
-    LSM_AXPROF_STOP = 2    /* running a stop */
+    LSM_AXPROF_IDLE = 0, /* at rest (or moved by the caller: CSP, path) */
+    LSM_AXPROF_MOVE = 1, /* running a planned move */
+    LSM_AXPROF_STOP = 2  /* running a stop */
 } lsm_axprof_mode;
 
 /* The limits of one machine axis are move.h's lsm_axis_limits (v, a, j, snap; every requested value is clamped
  * to them). */
 
-#define LSM_AXPROF_TYPE_LINEAR 0  /* 0x6086 = 0 */
-#define LSM_AXPROF_TYPE_SIN2 1    /* 0x6086 = 1 */
+#define LSM_AXPROF_TYPE_LINEAR 0 /* 0x6086 = 0 */
+#define LSM_AXPROF_TYPE_SIN2 1   /* 0x6086 = 1 */
 
 typedef struct lsm_axprof_limits {
-    lsm_real v_max_mm_s, a_max_mm_s2, j_max_mm_s3, snap_max_mm_s4;   /* all > 0 */
-    int profile_type;                                               /* LSM_AXPROF_TYPE_* */
+    lsm_real v_max_mm_s, a_max_mm_s2, j_max_mm_s3, snap_max_mm_s4; /* all > 0 */
+    int profile_type;                                              /* LSM_AXPROF_TYPE_* */
 } lsm_axprof_limits;
 
 typedef struct lsm_axprof {
     lsm_real cycle_s;
-    lsm_kin k;               /* present state: s_mm = position (axis frame), v, a, j */
-    uint8_t mode;            /* lsm_axprof_mode */
-    uint8_t stop_kind;       /* caller's label of the running stop (bigger = stronger), 0 = none */
+    lsm_kin k;         /* present state: s_mm = position (axis frame), v, a, j */
+    uint8_t mode;      /* lsm_axprof_mode */
+    uint8_t stop_kind; /* caller's label of the running stop (bigger = stronger), 0 = none */
     lsm_move mv;
     lsm_stepgen gen;
-    uint32_t cycle;          /* cycles of the move emitted */
-    lsm_real origin_mm;      /* move start position */
-    lsm_real target_mm;      /* move target */
+    uint32_t cycle;     /* cycles of the move emitted */
+    lsm_real origin_mm; /* move start position */
+    lsm_real target_mm; /* move target */
     lsm_jstop stop;
-    uint8_t defer;           /* a request waiting for the move's jerk to return to 0: AXPROF_DEFER_* (axprof.c) */
-    uint8_t defer_kind;      /* deferred stop: its kind */
+    uint8_t defer;              /* a request waiting for the move's jerk to return to 0: AXPROF_DEFER_* (axprof.c) */
+    uint8_t defer_kind;         /* deferred stop: its kind */
     lsm_jstop_limits defer_lim; /* deferred stop: its limits */
-    bool have_after;         /* a move waits for the end of the stop (retarget), or a deferred retarget */
+    bool have_after;            /* a move waits for the end of the stop (retarget), or a deferred retarget */
     lsm_real after_target_mm;
     lsm_axprof_limits after_lim;
 } lsm_axprof;

@@ -247,8 +247,7 @@ bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out)
     const lsm_kin e = s->start[s->n_phases];
     const lsm_real p_end = s->origin_mm + s->dir * e.s_mm;
     const lsm_real v_end = s->dir * e.v_mm_s;
-    const lsm_real scale =
-        lsm_fabs(s->start[0].v_mm_s) + lsm_fabs(s->start[0].a_mm_s2) * s->t_end_s + (lsm_real)1e-12;
+    const lsm_real scale = lsm_fabs(s->start[0].v_mm_s) + lsm_fabs(s->start[0].a_mm_s2) * s->t_end_s + (lsm_real)1e-12;
     if (lsm_fabs(v_end) > JSTOP_OVERSHOOT_REL * scale) {
         /* overshoot stage done: stop again from (p_end, v_end, 0) with the rest of this cycle */
         const lsm_jstop_limits lim = s->lim;

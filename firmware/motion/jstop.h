@@ -50,21 +50,21 @@
 #include "status.h"
 
 typedef struct lsm_jstop_limits {
-    lsm_real decel_mm_s2;  /* D > 0 */
-    lsm_real jerk_mm_s3;   /* J > 0 */
-    lsm_real snap_mm_s4;   /* S > 0 */
+    lsm_real decel_mm_s2; /* D > 0 */
+    lsm_real jerk_mm_s3;  /* J > 0 */
+    lsm_real snap_mm_s4;  /* S > 0 */
 } lsm_jstop_limits;
 
-#define LSM_JSTOP_PHASES 8  /* the jerk release, two ramps of three phases and the plateau between them */
+#define LSM_JSTOP_PHASES 8 /* the jerk release, two ramps of three phases and the plateau between them */
 
 typedef struct lsm_jstop {
     lsm_jstop_limits lim;
-    lsm_real dir;                        /* +1 / -1: travel frame -> axis frame */
-    lsm_real origin_mm;                  /* position at the start of the stop */
-    lsm_real t_s;                        /* time since the start of this stage (double build) */
-    unsigned ph;                         /* present phase (float build: time kept within the phase, so the */
-    lsm_real tau_s;                      /*   steps keep their length on long stops); time into it */
-    lsm_real t_end_s;                    /* duration of this stage */
+    lsm_real dir;       /* +1 / -1: travel frame -> axis frame */
+    lsm_real origin_mm; /* position at the start of the stop */
+    lsm_real t_s;       /* time since the start of this stage (double build) */
+    unsigned ph;        /* present phase (float build: time kept within the phase, so the */
+    lsm_real tau_s;     /*   steps keep their length on long stops); time into it */
+    lsm_real t_end_s;   /* duration of this stage */
     unsigned n_phases;
     lsm_phase_shape shape[LSM_JSTOP_PHASES];
     lsm_real dur_s[LSM_JSTOP_PHASES];

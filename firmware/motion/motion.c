@@ -161,8 +161,8 @@ static void axis_csp_step(lsm_motion_axis *a)
     if (a->csp_i < a->csp_n) {
         a->csp_i++;
         a->prof.k.s_mm = a->csp_i == a->csp_n ? a->csp_to_mm
-                                               : a->csp_from_mm + (a->csp_to_mm - a->csp_from_mm) *
-                                                                      (lsm_real)a->csp_i / (lsm_real)a->csp_n;
+                                              : a->csp_from_mm + (a->csp_to_mm - a->csp_from_mm) * (lsm_real)a->csp_i /
+                                                                     (lsm_real)a->csp_n;
         a->prof.k.v_mm_s = a->csp_v_mm_s;
     } else { /* the period ended without a new set-point: the demand holds */
         a->csp_active = false;

@@ -48,25 +48,25 @@
 #include "pathfeed.h"
 
 typedef enum lsm_motion_path_exec {
-    LSM_MOTION_PATH_PLANNER = 0,  /* look-ahead feed (pathfeed.h) */
-    LSM_MOTION_PATH_EXACT = 1     /* exact stop at every block end (pathexact.h) */
+    LSM_MOTION_PATH_PLANNER = 0, /* look-ahead feed (pathfeed.h) */
+    LSM_MOTION_PATH_EXACT = 1    /* exact stop at every block end (pathexact.h) */
 } lsm_motion_path_exec;
 
 typedef struct lsm_motion_config {
-    uint8_t n_axes;                       /* 1..LSM_MAX_AXES, as the node's */
-    lsm_real cycle_s;                     /* control cycle, > 0 */
-    lsm_axis_limits lim[LSM_MAX_AXES];    /* the machine's limits per axis, all > 0 */
-    uint8_t path_exec;                    /* lsm_motion_path_exec */
-    lsm_pathfeed_storage feed;            /* planner storage of the look-ahead feed (pathfeed.h) */
+    uint8_t n_axes;                    /* 1..LSM_MAX_AXES, as the node's */
+    lsm_real cycle_s;                  /* control cycle, > 0 */
+    lsm_axis_limits lim[LSM_MAX_AXES]; /* the machine's limits per axis, all > 0 */
+    uint8_t path_exec;                 /* lsm_motion_path_exec */
+    lsm_pathfeed_storage feed;         /* planner storage of the look-ahead feed (pathfeed.h) */
 } lsm_motion_config;
 
 typedef struct lsm_motion_axis {
-    lsm_axprof prof;                  /* demand of the axis (mm), also in CSP / path (kept in step) */
-    int8_t mode;                      /* mode display handled last cycle */
-    bool pp_running;                  /* a PP set-point is executing: lsm_cia402_pp_done at its end */
-    bool csp_active;                  /* CSP interpolation in progress */
+    lsm_axprof prof; /* demand of the axis (mm), also in CSP / path (kept in step) */
+    int8_t mode;     /* mode display handled last cycle */
+    bool pp_running; /* a PP set-point is executing: lsm_cia402_pp_done at its end */
+    bool csp_active; /* CSP interpolation in progress */
     lsm_real csp_from_mm, csp_to_mm, csp_v_mm_s, csp_v_prev_mm_s;
-    uint32_t csp_i, csp_n;            /* cycle within the period, cycles of the period */
+    uint32_t csp_i, csp_n;               /* cycle within the period, cycles of the period */
     lsm_real actual_mm, actual_vel_mm_s; /* drive feedback of the last cycle */
     uint32_t plan_errors;
 } lsm_motion_axis;
@@ -77,8 +77,8 @@ typedef struct lsm_motion {
     lsm_real cycle_s;
     lsm_axis_limits lim[LSM_MAX_AXES];
     lsm_motion_axis ax[LSM_MAX_AXES];
-    lsm_pathexact path;               /* exact-stop executor (path_exec = EXACT) */
-    lsm_pathfeed feed;                /* look-ahead feed (path_exec = PLANNER) */
+    lsm_pathexact path;                                              /* exact-stop executor (path_exec = EXACT) */
+    lsm_pathfeed feed;                                               /* look-ahead feed (path_exec = PLANNER) */
     lsm_real path_pos_mm[LSM_MAX_AXES], path_vel_mm_s[LSM_MAX_AXES]; /* the executor's output this cycle */
     bool path_moving;
 } lsm_motion;

@@ -57,9 +57,18 @@ void lsm_pathexact_sync(lsm_pathexact *np, const lsm_real *pos_mm)
 static void plane_axes(uint8_t plane, uint8_t *a, uint8_t *b)
 {
     switch (plane) {
-    case 1: *a = 2; *b = 0; break; /* ZX (G18) */
-    case 2: *a = 1; *b = 2; break; /* YZ (G19) */
-    default: *a = 0; *b = 1; break; /* XY (G17) */
+    case 1:
+        *a = 2;
+        *b = 0;
+        break; /* ZX (G18) */
+    case 2:
+        *a = 1;
+        *b = 2;
+        break; /* YZ (G19) */
+    default:
+        *a = 0;
+        *b = 1;
+        break; /* XY (G17) */
     }
 }
 

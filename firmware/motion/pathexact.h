@@ -36,19 +36,19 @@ typedef struct lsm_pathexact {
     uint8_t n_axes;
     lsm_real cycle_s;
     lsm_axis_limits lim[LSM_MAX_AXES];
-    lsm_real pos_mm[LSM_MAX_AXES];    /* axis positions commanded by the path */
-    lsm_real vel_mm_s[LSM_MAX_AXES];  /* their velocity over the last cycle */
-    lsm_axprof s;                     /* arc length within the active block */
-    bool active;                      /* a block is being executed (or held) */
+    lsm_real pos_mm[LSM_MAX_AXES];   /* axis positions commanded by the path */
+    lsm_real vel_mm_s[LSM_MAX_AXES]; /* their velocity over the last cycle */
+    lsm_axprof s;                    /* arc length within the active block */
+    bool active;                     /* a block is being executed (or held) */
     lsm_co_path_block blk;
-    uint16_t epoch;                   /* co_path epoch when the block was taken */
+    uint16_t epoch; /* co_path epoch when the block was taken */
     uint8_t type;
     lsm_real start_mm[LSM_MAX_AXES], end_mm[LSM_MAX_AXES], length_mm;
-    uint8_t pa, pb;                   /* arc: plane axes (first, second) */
+    uint8_t pa, pb; /* arc: plane axes (first, second) */
     lsm_real c_mm[2], r0_mm, r1_mm, th0_rad, sweep_rad;
-    lsm_axprof_limits plim;           /* limits along the block (feed without override) */
-    lsm_real feed_mm_s;               /* programmed feed */
-    uint32_t last_seq;                /* last block finished */
+    lsm_axprof_limits plim; /* limits along the block (feed without override) */
+    lsm_real feed_mm_s;     /* programmed feed */
+    uint32_t last_seq;      /* last block finished */
     uint32_t blocks_done;
     uint32_t rejected;
 } lsm_pathexact;

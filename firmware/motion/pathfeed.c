@@ -99,9 +99,18 @@ void lsm_pathfeed_sync(lsm_pathfeed *pf, const lsm_real *pos_mm)
 static lsm_geom_plane plane_of(uint8_t plane, unsigned *a, unsigned *b)
 {
     switch (plane) {
-    case 1: *a = 2; *b = 0; return LSM_GEOM_PLANE_ZX;
-    case 2: *a = 1; *b = 2; return LSM_GEOM_PLANE_YZ;
-    default: *a = 0; *b = 1; return LSM_GEOM_PLANE_XY;
+    case 1:
+        *a = 2;
+        *b = 0;
+        return LSM_GEOM_PLANE_ZX;
+    case 2:
+        *a = 1;
+        *b = 2;
+        return LSM_GEOM_PLANE_YZ;
+    default:
+        *a = 0;
+        *b = 1;
+        return LSM_GEOM_PLANE_XY;
     }
 }
 
@@ -277,8 +286,7 @@ void lsm_pathfeed_tick(lsm_pathfeed *pf, const lsm_co_path *cp, lsm_co_path_repo
     const lsm_real f = lsm_fabs(lsm_interp_feed(&pf->ip)) * 1000;
     rep->feed_um_s = f > (lsm_real)4.0e9 ? 4000000000u : (uint32_t)(f + (lsm_real)0.5);
     rep->standstill = !lsm_pathfeed_moving(pf);
-    rep->starved = pf->motion == LSM_CO_PATH_MOTION_RUN && !lsm_pathfeed_moving(pf) &&
-                   lsm_co_path_count(cp) == 0u;
+    rep->starved = pf->motion == LSM_CO_PATH_MOTION_RUN && !lsm_pathfeed_moving(pf) && lsm_co_path_count(cp) == 0u;
 }
 
 void lsm_pathfeed_step(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm, lsm_co_path_report *rep)

@@ -56,22 +56,22 @@ typedef struct lsm_pathfeed {
     lsm_real cycle_s;
     lsm_planner_config cfg;
     lsm_planner pl;
-    lsm_pblock *storage;              /* caller's planner blocks */
-    uint32_t capacity;                /* blocks of storage */
+    lsm_pblock *storage; /* caller's planner blocks */
+    uint32_t capacity;   /* blocks of storage */
     lsm_interp ip;
-    lsm_real pos_mm[LSM_MAX_AXES];    /* set-points of the last cycle */
-    lsm_real vel_mm_s[LSM_MAX_AXES];  /* their velocity over the last cycle */
-    uint16_t epoch;                   /* co_path epoch of the blocks the planner holds */
-    bool holding;                     /* lsm_interp_hold was requested */
-    bool dirty;                       /* the planner holds blocks of an older epoch: restart it at rest */
-    uint8_t override_pct;             /* last override passed on */
-    uint8_t motion;                   /* lsm_co_path_motion seen by the last lsm_pathfeed_background */
-    uint32_t last_seq;                /* tag of the last block appended */
+    lsm_real pos_mm[LSM_MAX_AXES];   /* set-points of the last cycle */
+    lsm_real vel_mm_s[LSM_MAX_AXES]; /* their velocity over the last cycle */
+    uint16_t epoch;                  /* co_path epoch of the blocks the planner holds */
+    bool holding;                    /* lsm_interp_hold was requested */
+    bool dirty;                      /* the planner holds blocks of an older epoch: restart it at rest */
+    uint8_t override_pct;            /* last override passed on */
+    uint8_t motion;                  /* lsm_co_path_motion seen by the last lsm_pathfeed_background */
+    uint32_t last_seq;               /* tag of the last block appended */
     uint32_t appended, rejected, restarts;
-    uint32_t underrun_restarts;       /* planner restarted after an underrun stop (workaround above) */
-    uint32_t stuck;                   /* idle with blocks, not on a block end: left alone */
-    uint32_t idle_cycles;             /* consecutive cycles IDLE with blocks while running */
-    lsm_co_path_block *saved;         /* caller's ring of copies of the blocks given to the planner */
+    uint32_t underrun_restarts;              /* planner restarted after an underrun stop (workaround above) */
+    uint32_t stuck;                          /* idle with blocks, not on a block end: left alone */
+    uint32_t idle_cycles;                    /* consecutive cycles IDLE with blocks while running */
+    lsm_co_path_block *saved;                /* caller's ring of copies of the blocks given to the planner */
     uint32_t saved_cap, saved_head, n_saved; /* oldest copy at saved[saved_head] */
 } lsm_pathfeed;
 

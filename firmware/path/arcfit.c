@@ -8,8 +8,8 @@
 #define PI_R ((lsm_real)LSM_PI)
 
 /* Tuning of the fit. */
-#define AF_LINE_PREFER LSM_R(0.25)     /* a line within tol / 4 is taken without trying an arc (fewer curvature steps) */
-#define AF_ORDER_SLACK LSM_R(1e-9)     /* relative slack of "the points follow each other" (rounding of the points) */
+#define AF_LINE_PREFER LSM_R(0.25) /* a line within tol / 4 is taken without trying an arc (fewer curvature steps) */
+#define AF_ORDER_SLACK LSM_R(1e-9) /* relative slack of "the points follow each other" (rounding of the points) */
 #define AF_ANGLE_SLACK_RAD LSM_R(1e-9) /* a point this far before the arc's start still counts as at its start */
 #define AF_FLAT_EPS LSM_R(2048.0)      /* an arc's evaluation error R eps times this must stay below tol (float) */
 #define AF_MIN_RADIUS_TOLS LSM_R(4.0)  /* radius at least 4 tol: a smaller circle is not worth an arc at this tol */
@@ -60,8 +60,8 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_re
 }
 
 /* The line p0 -> qe as the fit, if it fits within tol. */
-static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6,
-                         lsm_geom *g, lsm_arcfit_result *res)
+static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6, lsm_geom *g,
+                         lsm_arcfit_result *res)
 {
     if (!(line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK))
         return false;

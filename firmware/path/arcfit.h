@@ -37,9 +37,9 @@ typedef enum lsm_arcfit_kind { LSM_ARCFIT_NONE = 0, LSM_ARCFIT_LINE = 1, LSM_ARC
 
 typedef struct lsm_arcfit_result {
     lsm_arcfit_kind kind;
-    lsm_real err_mm;      /* largest distance between the polyline and the element (bound) */
-    lsm_real radius_mm;   /* arcs */
-    lsm_real normal[3];   /* arcs: unit normal of the plane (the arc runs counter-clockwise about it) */
+    lsm_real err_mm;    /* largest distance between the polyline and the element (bound) */
+    lsm_real radius_mm; /* arcs */
+    lsm_real normal[3]; /* arcs: unit normal of the plane (the arc runs counter-clockwise about it) */
 } lsm_arcfit_result;
 
 /*

@@ -4,11 +4,11 @@
 #include "lsm_math.h"
 
 #if LSM_REAL_IS_FLOAT
-#define CL_SPLIT 4097.0f      /* 2^12 + 1: splits a float into two halves whose squares are exact */
+#define CL_SPLIT 4097.0f /* 2^12 + 1: splits a float into two halves whose squares are exact */
 #define CL_TINY 1.0e-30f
-#define CL_HUGE_X 1.0e4f      /* above: x F(x) = i / (pi x) to float precision */
+#define CL_HUGE_X 1.0e4f /* above: x F(x) = i / (pi x) to float precision */
 #else
-#define CL_SPLIT 134217729.0  /* 2^27 + 1 */
+#define CL_SPLIT 134217729.0 /* 2^27 + 1 */
 #define CL_TINY 1.0e-300
 #define CL_HUGE_X 1.0e8
 #endif
@@ -18,16 +18,19 @@
 
 /* 1 / (n + 1) for n = 0 .. LSM_CLOTHOID_MAX_TERMS + 3 (avoids divisions in the series loops). */
 #define CL_INV(n) ((lsm_real)(1.0 / (n)))
-static const lsm_real k_inv[] = {
-    CL_INV(1),  CL_INV(2),  CL_INV(3),  CL_INV(4),  CL_INV(5),  CL_INV(6),  CL_INV(7),  CL_INV(8),
-    CL_INV(9),  CL_INV(10), CL_INV(11), CL_INV(12), CL_INV(13), CL_INV(14), CL_INV(15), CL_INV(16),
-    CL_INV(17), CL_INV(18), CL_INV(19), CL_INV(20), CL_INV(21), CL_INV(22), CL_INV(23), CL_INV(24),
-    CL_INV(25), CL_INV(26), CL_INV(27), CL_INV(28), CL_INV(29), CL_INV(30), CL_INV(31), CL_INV(32),
-    CL_INV(33), CL_INV(34), CL_INV(35), CL_INV(36), CL_INV(37), CL_INV(38), CL_INV(39), CL_INV(40),
-    CL_INV(41), CL_INV(42), CL_INV(43), CL_INV(44), CL_INV(45), CL_INV(46), CL_INV(47), CL_INV(48)};
+static const lsm_real k_inv[] = {CL_INV(1),  CL_INV(2),  CL_INV(3),  CL_INV(4),  CL_INV(5),  CL_INV(6),  CL_INV(7),
+                                 CL_INV(8),  CL_INV(9),  CL_INV(10), CL_INV(11), CL_INV(12), CL_INV(13), CL_INV(14),
+                                 CL_INV(15), CL_INV(16), CL_INV(17), CL_INV(18), CL_INV(19), CL_INV(20), CL_INV(21),
+                                 CL_INV(22), CL_INV(23), CL_INV(24), CL_INV(25), CL_INV(26), CL_INV(27), CL_INV(28),
+                                 CL_INV(29), CL_INV(30), CL_INV(31), CL_INV(32), CL_INV(33), CL_INV(34), CL_INV(35),
+                                 CL_INV(36), CL_INV(37), CL_INV(38), CL_INV(39), CL_INV(40), CL_INV(41), CL_INV(42),
+                                 CL_INV(43), CL_INV(44), CL_INV(45), CL_INV(46), CL_INV(47), CL_INV(48)};
 _Static_assert(sizeof k_inv / sizeof k_inv[0] >= LSM_CLOTHOID_MAX_TERMS + 4, "k_inv too short");
 
-static inline lsm_real cl_abs1(lsm_real r, lsm_real i) { return lsm_fabs(r) + lsm_fabs(i); }
+static inline lsm_real cl_abs1(lsm_real r, lsm_real i)
+{
+    return lsm_fabs(r) + lsm_fabs(i);
+}
 
 /* Complex 1 / (br + i bi) without overflow (Smith). */
 static void cl_cinv(lsm_real br, lsm_real bi, lsm_real *rr, lsm_real *ri)
@@ -65,9 +68,9 @@ void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_cl
     lsm_real m2r = k_inv[2], m2i = LSM_R(0.25) * a;
     int n = 1;
     while (n + 1 < LSM_CLOTHOID_MAX_TERMS) {
-        const lsm_real inv = k_inv[n];                       /* 1 / (n + 1) */
+        const lsm_real inv = k_inv[n]; /* 1 / (n + 1) */
         const lsm_real tr = a * gr + b * pr, ti = a * gi + b * pi;
-        const lsm_real nr = -ti * inv, ni = tr * inv;        /* g_{n+1} = i (a g_n + b g_{n-1}) / (n+1) */
+        const lsm_real nr = -ti * inv, ni = tr * inv; /* g_{n+1} = i (a g_n + b g_{n-1}) / (n+1) */
         n++;
         pr = gr;
         pi = gi;
@@ -75,7 +78,7 @@ void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_cl
         gi = ni;
         er += nr;
         ei += ni;
-        const lsm_real i0 = k_inv[n];                        /* 1 / (n + 1) */
+        const lsm_real i0 = k_inv[n]; /* 1 / (n + 1) */
         m0r += nr * i0;
         m0i += ni * i0;
         if (nmom > 1) {
@@ -181,8 +184,8 @@ static void cl_fresnel_aux(lsm_real x, lsm_real *gr, lsm_real *gi)
         return;
     }
     const lsm_real wi = -CL_PI * x * x;
-    lsm_real fr = LSM_R(1.0), fi = wi;       /* f = b0 */
-    lsm_real cr = fr, ci = fi;               /* C */
+    lsm_real fr = LSM_R(1.0), fi = wi;         /* f = b0 */
+    lsm_real cr = fr, ci = fi;                 /* C */
     lsm_real dr = LSM_R(0.0), di = LSM_R(0.0); /* D */
     for (int n = 1; n < 500; n++) {
         const lsm_real a = -(lsm_real)((2 * n - 1) * (2 * n));
@@ -638,8 +641,8 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
 {
     if (st == NULL || seg == NULL)
         return LSM_E_NULL;
-    lsm_status r = cl_check_seg(seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm, seg->c_per_mm2,
-                                seg->len_mm);
+    lsm_status r =
+        cl_check_seg(seg->x0_mm, seg->y0_mm, seg->theta0_rad, seg->kappa0_per_mm, seg->c_per_mm2, seg->len_mm);
     if (r != LSM_OK)
         return r;
     r = cl_check(s0_mm);
@@ -658,8 +661,7 @@ lsm_status lsm_clothoid_stepper_init(lsm_clothoid_stepper *st, const lsm_clothoi
     return LSM_OK;
 }
 
-void lsm_clothoid_local(lsm_real a, lsm_real b, lsm_real *er_out, lsm_real *ei_out, lsm_real *mr_out,
-                        lsm_real *mi_out)
+void lsm_clothoid_local(lsm_real a, lsm_real b, lsm_real *er_out, lsm_real *ei_out, lsm_real *mr_out, lsm_real *mi_out)
 {
     const lsm_real tol = LSM_R(0.5) * LSM_REAL_EPS;
     const lsm_real grow = lsm_fabs(a) + lsm_fabs(b);
@@ -722,7 +724,7 @@ static void cl_step_general(lsm_clothoid_stepper *st, lsm_real ds, lsm_real a, l
     const lsm_real h = ds / (lsm_real)m;
     for (int i = 0; i < m; i++) {
         cl_apply(st, h, cl_local_any(st->kappa_per_mm * h, c * h * h)); /* checks the region again */
-        st->kappa_per_mm += c * h; /* reset from the arc length after the step */
+        st->kappa_per_mm += c * h;                                      /* reset from the arc length after the step */
     }
 }
 
@@ -796,12 +798,12 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
     if (J) {
         const lsm_real th = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
         /* dP/dc = int (t^2 / 2) i e^{i theta} dt = (i M2) / 2 */
-        J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]);   /* dF1/dc */
+        J[0] = LSM_R(0.5) * (-f->nx * mi[2] + f->ny * mr[2]); /* dF1/dc */
         lsm_real co, si;
         lsm_sincos(th, &si, &co);
-        J[1] = f->nx * co + f->ny * si;                         /* dF1/ds */
-        J[2] = LSM_R(0.5) * s * s;                              /* dF2/dc */
-        J[3] = f->k0 + c * s;                                   /* dF2/ds */
+        J[1] = f->nx * co + f->ny * si; /* dF1/ds */
+        J[2] = LSM_R(0.5) * s * s;      /* dF2/dc */
+        J[3] = f->k0 + c * s;           /* dF2/ds */
     }
     return true;
 }
@@ -814,13 +816,13 @@ static lsm_real cl_wrap_pi(lsm_real a)
 }
 
 /* Tuning of the fit. */
-#define CL_FIT_ZERO_EPS LSM_R(16.0)  /* eps multiples: on the line / along its normal within the rounding of d0 */
-#define CL_FIT_SCAN_K_MIN (-4)       /* the scan starts at s = dist / 4: shorter candidates turn too sharply */
-#define CL_FIT_SCAN_K_MAX 24         /* ... and ends at s = 2^12 dist, the documented reach (4096 times dist) */
-#define CL_FIT_CONV_EPS LSM_R(32.0)  /* eps multiples of the problem's scale: residuals at rounding level */
-#define CL_FIT_MAX_HALVINGS 30       /* damping: a Newton step is halved at most this often (2^-30) */
-#define CL_FIT_MERIT_FLOOR LSM_R(4.0) /* eps^2 multiples: a merit at rounding level counts as a decrease */
-#define CL_FIT_BISECT_EVERY 3        /* fallback: a bisection when 3 steps did not halve the bracket */
+#define CL_FIT_ZERO_EPS LSM_R(16.0)    /* eps multiples: on the line / along its normal within the rounding of d0 */
+#define CL_FIT_SCAN_K_MIN (-4)         /* the scan starts at s = dist / 4: shorter candidates turn too sharply */
+#define CL_FIT_SCAN_K_MAX 24           /* ... and ends at s = 2^12 dist, the documented reach (4096 times dist) */
+#define CL_FIT_CONV_EPS LSM_R(32.0)    /* eps multiples of the problem's scale: residuals at rounding level */
+#define CL_FIT_MAX_HALVINGS 30         /* damping: a Newton step is halved at most this often (2^-30) */
+#define CL_FIT_MERIT_FLOOR LSM_R(4.0)  /* eps^2 multiples: a merit at rounding level counts as a decrease */
+#define CL_FIT_BISECT_EVERY 3          /* fallback: a bisection when 3 steps did not halve the bracket */
 #define CL_FIT_COLLAPSE_EPS LSM_R(4.0) /* fallback: eps multiples of s; a narrower bracket pins the root */
 
 /* Validates the input and sets up the problem: unit normal, signed distance d0 and its rounding bound. */
@@ -914,8 +916,8 @@ static bool cl_fit_converged(const cl_fit *f, lsm_real dist, lsm_real s, lsm_rea
 
 /* One damped Newton step on (c, s) from the residuals F1, F2 and Jacobian J (determinant det != 0): the full step, halved until the merit
  * (F1 / dist)^2 + F2^2 decreases. False if no halving decreases it. */
-static bool cl_fit_newton_step(cl_fit *f, lsm_real dist, const lsm_real J[4], lsm_real det, lsm_real F1,
-                               lsm_real F2, lsm_real *c, lsm_real *s)
+static bool cl_fit_newton_step(cl_fit *f, lsm_real dist, const lsm_real J[4], lsm_real det, lsm_real F1, lsm_real F2,
+                               lsm_real *c, lsm_real *s)
 {
     const lsm_real dc = (-F1 * J[3] + F2 * J[1]) / det;
     const lsm_real dsv = (-F2 * J[0] + F1 * J[2]) / det;
@@ -1009,8 +1011,7 @@ static bool cl_fit_bracket(cl_fit *f, lsm_real dist, lsm_real sa, lsm_real ra, l
 }
 
 /* The result at (c, s): the end state from one more evaluation, and the residuals. */
-static void cl_fit_emit(const cl_fit *f, lsm_real c, lsm_real s, lsm_real F1, lsm_real F2,
-                        lsm_clothoid_fit_result *out)
+static void cl_fit_emit(const cl_fit *f, lsm_real c, lsm_real s, lsm_real F1, lsm_real F2, lsm_clothoid_fit_result *out)
 {
     lsm_real mr[3], mi[3];
     cl_pieces(f->th0, f->k0, c, s, 1, mr, mi, NULL);
@@ -1024,8 +1025,8 @@ static void cl_fit_emit(const cl_fit *f, lsm_real c, lsm_real s, lsm_real F1, ls
     out->residual_rad = lsm_fabs(F2);
 }
 
-lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm,
-                               lsm_real nx, lsm_real ny, lsm_clothoid_fit_result *out)
+lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm, lsm_real nx,
+                               lsm_real ny, lsm_clothoid_fit_result *out)
 {
     if (start == NULL || out == NULL)
         return LSM_E_NULL;

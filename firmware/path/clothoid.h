@@ -85,11 +85,11 @@
 
 /* A planar clothoid segment. */
 typedef struct lsm_clothoid {
-    lsm_real x0_mm, y0_mm;   /* start point */
-    lsm_real theta0_rad;     /* start tangent angle */
-    lsm_real kappa0_per_mm;  /* start curvature (signed) */
-    lsm_real c_per_mm2;      /* sharpness dkappa/ds */
-    lsm_real len_mm;         /* length L >= 0 */
+    lsm_real x0_mm, y0_mm;  /* start point */
+    lsm_real theta0_rad;    /* start tangent angle */
+    lsm_real kappa0_per_mm; /* start curvature (signed) */
+    lsm_real c_per_mm2;     /* sharpness dkappa/ds */
+    lsm_real len_mm;        /* length L >= 0 */
 } lsm_clothoid;
 
 /* A point on a clothoid. */
@@ -109,8 +109,8 @@ lsm_status lsm_clothoid_eval(const lsm_clothoid *cl, lsm_real s_mm, lsm_clothoid
 
 /* The displacement X + iY = int_0^s e^{i(theta0 + kappa0 t + c t^2/2)} dt. No validation: finite
  * inputs give finite results; callers validate. Negative s integrates backwards. */
-void lsm_clothoid_integral(lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real c_per_mm2,
-                           lsm_real s_mm, lsm_real *dx_mm, lsm_real *dy_mm);
+void lsm_clothoid_integral(lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real c_per_mm2, lsm_real s_mm,
+                           lsm_real *dx_mm, lsm_real *dy_mm);
 
 /* Normalised Fresnel integrals C(x) = int_0^x cos(pi t^2/2) dt and S(x) (sin); odd in x. */
 void lsm_clothoid_fresnel(lsm_real x, lsm_real *c, lsm_real *s);
@@ -146,14 +146,14 @@ void lsm_clothoid_local_fast(lsm_real a, lsm_real b, lsm_real *er, lsm_real *ei,
 /* Incremental evaluation for the per-cycle interpolator (see the header comment). */
 typedef struct lsm_clothoid_stepper {
     lsm_clothoid seg;
-    lsm_real s_mm;            /* arc length reached, in [0, len] */
-    lsm_real cs_mm;           /* compensation term of the arc-length sum (Kahan) */
-    lsm_real x_mm, y_mm;      /* position */
-    lsm_real cx_mm, cy_mm;    /* compensation terms of the position sums (Kahan) */
-    lsm_real tx, ty;          /* unit tangent (cos theta, sin theta) */
-    lsm_real kappa_per_mm;    /* curvature */
-    uint32_t since_anchor;    /* steps since the last exact evaluation */
-    uint32_t anchor_every;    /* re-anchor every this many steps (0: never) */
+    lsm_real s_mm;         /* arc length reached, in [0, len] */
+    lsm_real cs_mm;        /* compensation term of the arc-length sum (Kahan) */
+    lsm_real x_mm, y_mm;   /* position */
+    lsm_real cx_mm, cy_mm; /* compensation terms of the position sums (Kahan) */
+    lsm_real tx, ty;       /* unit tangent (cos theta, sin theta) */
+    lsm_real kappa_per_mm; /* curvature */
+    uint32_t since_anchor; /* steps since the last exact evaluation */
+    uint32_t anchor_every; /* re-anchor every this many steps (0: never) */
 } lsm_clothoid_stepper;
 
 /* Start at arc length s0 (0 <= s0 <= len), evaluated from the segment's start (see the header comment; at s0 = len
@@ -168,14 +168,14 @@ lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_cloth
 
 /* Fit result. */
 typedef struct lsm_clothoid_fit_result {
-    lsm_real c_per_mm2;        /* sharpness found */
-    lsm_real s_mm;             /* length found (> 0, or 0 if the start already is on the line, normal to it) */
-    lsm_clothoid_state end;    /* end state (eqs 1, 2, 11, 12) */
-    int iterations;            /* Newton iterations on (c, s) */
-    int bracket_steps;         /* steps of the bracketed fallback (0 unless Newton stalled) */
-    int evaluations;           /* clothoid evaluations, scan included */
-    lsm_real residual_mm;      /* distance of the end point from the line */
-    lsm_real residual_rad;     /* angle between the end tangent and the line normal */
+    lsm_real c_per_mm2;     /* sharpness found */
+    lsm_real s_mm;          /* length found (> 0, or 0 if the start already is on the line, normal to it) */
+    lsm_clothoid_state end; /* end state (eqs 1, 2, 11, 12) */
+    int iterations;         /* Newton iterations on (c, s) */
+    int bracket_steps;      /* steps of the bracketed fallback (0 unless Newton stalled) */
+    int evaluations;        /* clothoid evaluations, scan included */
+    lsm_real residual_mm;   /* distance of the end point from the line */
+    lsm_real residual_rad;  /* angle between the end tangent and the line normal */
 } lsm_clothoid_fit_result;
 
 /* Fit to the line a x + b y + c = 0 (general form; vertical and horizontal lines are fine).
@@ -186,7 +186,7 @@ typedef struct lsm_clothoid_fit_result {
 lsm_status lsm_clothoid_fit_line(const lsm_clothoid_state *start, lsm_real a, lsm_real b, lsm_real c,
                                  lsm_clothoid_fit_result *out);
 /* The same with the line through (qx, qy) with normal (nx, ny) (need not be unit length). */
-lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm,
-                               lsm_real nx, lsm_real ny, lsm_clothoid_fit_result *out);
+lsm_status lsm_clothoid_fit_pn(const lsm_clothoid_state *start, lsm_real qx_mm, lsm_real qy_mm, lsm_real nx,
+                               lsm_real ny, lsm_clothoid_fit_result *out);
 
 #endif /* LSM_CLOTHOID_H */

@@ -5,9 +5,9 @@
 #include "lsm_math.h"
 
 #if LSM_REAL_IS_FLOAT
-#define CN_PLANAR_TOL LSM_R(1e-5)   /* |line direction . arc normal| accepted as "in the plane" */
-#define CN_KAPPA_REL LSM_R(1e-5)    /* curvatures equal to this relative amount: no jump */
-#define CN_TTOL LSM_R(1e-6)         /* searches along the transition stop at this fraction of L */
+#define CN_PLANAR_TOL LSM_R(1e-5) /* |line direction . arc normal| accepted as "in the plane" */
+#define CN_KAPPA_REL LSM_R(1e-5)  /* curvatures equal to this relative amount: no jump */
+#define CN_TTOL LSM_R(1e-6)       /* searches along the transition stop at this fraction of L */
 #else
 #define CN_PLANAR_TOL LSM_R(1e-9)
 #define CN_KAPPA_REL LSM_R(1e-9)
@@ -19,11 +19,14 @@
 #define CN_MARGIN LSM_R(1e-4)
 #define CN_MAX_NEWTON 14
 #define CN_MAX_SCALES 14
-#define CN_SAMPLES 4     /* samples per clothoid for the deviation */
-#define CN_GOLDEN 4      /* golden-section steps of a smooth bracket before the parabolic ones */
+#define CN_SAMPLES 4 /* samples per clothoid for the deviation */
+#define CN_GOLDEN 4  /* golden-section steps of a smooth bracket before the parabolic ones */
 #define CN_ACCEPT ((lsm_real)LSM_CORNER_ACCEPT)
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
 {
@@ -37,14 +40,14 @@ static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
  * cosine of the half width). */
 typedef struct {
     lsm_real k, len, dmax;
-    lsm_real bx, by;          /* the block's point at the corner (V1 or V2) */
-    lsm_real tx, ty;          /* its tangent there */
-    lsm_real cx, cy, r;       /* arc centre and radius */
-    lsm_real ak, ux, uy;      /* arc: |k|, unit vector from the corner point towards the centre */
-    lsm_real fx, fy;          /* the block's far end point */
-    lsm_real ftx, fty;        /* its tangent there */
-    bool full;                /* arc covers the full circle */
-    bool wide;                /* arc turns pi or more */
+    lsm_real bx, by;     /* the block's point at the corner (V1 or V2) */
+    lsm_real tx, ty;     /* its tangent there */
+    lsm_real cx, cy, r;  /* arc centre and radius */
+    lsm_real ak, ux, uy; /* arc: |k|, unit vector from the corner point towards the centre */
+    lsm_real fx, fy;     /* the block's far end point */
+    lsm_real ftx, fty;   /* its tangent there */
+    bool full;           /* arc covers the full circle */
+    bool wide;           /* arc turns pi or more */
     bool is_arc;
 } cn_block;
 
@@ -272,8 +275,8 @@ static void cn_sample_states(cn_ctx *c)
     c->stx[0] = c->cs;
     c->sty[0] = c->ss;
     for (int j = 0; j < 2 * CN_SAMPLES; j++) {
-        const lsm_real k = j < CN_SAMPLES ? c->b[0].k + c->ca * c->h * (lsm_real)j
-                                          : c->km + c->cb * c->h * (lsm_real)(j - CN_SAMPLES);
+        const lsm_real k =
+            j < CN_SAMPLES ? c->b[0].k + c->ca * c->h * (lsm_real)j : c->km + c->cb * c->h * (lsm_real)(j - CN_SAMPLES);
         cn_sub(c->sx[j], c->sy[j], c->stx[j], c->sty[j], k, cn_sharp(c, j), c->h, &c->sx[j + 1], &c->sy[j + 1],
                &c->stx[j + 1], &c->sty[j + 1]);
     }
@@ -629,8 +632,8 @@ static void cn_fill_clothoid(lsm_geom *g, const lsm_real o[3], const lsm_real e1
 }
 
 /* Fills the clothoid pair of the general solution into out. */
-static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real ey[3],
-                          const lsm_geom *b1, const lsm_geom *b2, lsm_real gap_in, lsm_corner_result *out)
+static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real ey[3], const lsm_geom *b1,
+                          const lsm_geom *b2, lsm_real gap_in, lsm_corner_result *out)
 {
     const cn_block *k1 = &c->b[0], *k2 = &c->b[1];
     const lsm_real L = c->L;
@@ -669,12 +672,12 @@ static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real 
 }
 
 /* Tuning of the corner search (lsm_corner_smooth). */
-#define CN_TRIM_MAX_SHARE LSM_R(0.999)  /* a trim leaves at least 0.1 % of its block (no zero-length rest) */
-#define CN_PATH_DEV_COEF LSM_R(0.0235)  /* path distance of a curvature jump, about 0.0235 |dk| L^2 (docs/clothoid.md) */
-#define CN_TRIM_BACKOFF LSM_R(0.99)     /* a scale whose trims hit their limits: retry 1 % inside them */
-#define CN_TRIM_NEAR LSM_R(0.98)        /* trims within 2 % of their limits: the scale cannot grow much more */
-#define CN_BRACKET_CLOSED LSM_R(1.02)   /* scale bracket closed to 2 %: the accepted scale is as good as it gets */
-#define CN_MIN_SCALE_STEP LSM_R(1e-9)   /* a next scale below 1e-9 of the last: the search has collapsed */
+#define CN_TRIM_MAX_SHARE LSM_R(0.999) /* a trim leaves at least 0.1 % of its block (no zero-length rest) */
+#define CN_PATH_DEV_COEF LSM_R(0.0235) /* path distance of a curvature jump, about 0.0235 |dk| L^2 (docs/clothoid.md) */
+#define CN_TRIM_BACKOFF LSM_R(0.99)    /* a scale whose trims hit their limits: retry 1 % inside them */
+#define CN_TRIM_NEAR LSM_R(0.98)       /* trims within 2 % of their limits: the scale cannot grow much more */
+#define CN_BRACKET_CLOSED LSM_R(1.02)  /* scale bracket closed to 2 %: the accepted scale is as good as it gets */
+#define CN_MIN_SCALE_STEP LSM_R(1e-9)  /* a next scale below 1e-9 of the last: the search has collapsed */
 
 /* The corner in its plane: end of block 1 (v1, t1), start of block 2 (v2, t2) and the gap g between them, the
  * frame (ex = t1, ey = n x ex; ey flipped so that the turn is a left turn), the blocks' signed in-plane curvatures
@@ -758,9 +761,8 @@ static lsm_status cn_corner_orient(cn_corner *cc)
         if (cc->bb[i]->kind == LSM_GEOM_ARC) {
             lsm_real na[3];
             lsm_geom_normal(cc->bb[i], na);
-            const lsm_real sgn = (cc->bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (dot3(na, cc->n) > LSM_R(0.0))
-                                     ? LSM_R(1.0)
-                                     : LSM_R(-1.0);
+            const lsm_real sgn =
+                (cc->bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (dot3(na, cc->n) > LSM_R(0.0)) ? LSM_R(1.0) : LSM_R(-1.0);
             cc->k[i] = sgn / cc->bb[i]->u.arc.radius_mm;
         }
     }
@@ -865,10 +867,10 @@ static lsm_status cn_line_line(const cn_corner *cc, const lsm_real dmax[2], lsm_
 
 /* The search over the scale L of the general case. */
 typedef struct {
-    lsm_real L, g1, g2;     /* the scale to try next and the Newton start of its trims */
-    lsm_real L_ok, L_bad;   /* the largest scale within the tolerance, the smallest beyond it or without solution */
+    lsm_real L, g1, g2;      /* the scale to try next and the Newton start of its trims */
+    lsm_real L_ok, L_bad;    /* the largest scale within the tolerance, the smallest beyond it or without solution */
     lsm_real L_prev, D_prev; /* the last measurement */
-    lsm_real ma, mb;        /* the model D = ma L + mb L^2 */
+    lsm_real ma, mb;         /* the model D = ma L + mb L^2 */
     lsm_real best_d1, best_d2, best_vd, best_pd; /* the solution at L_ok */
     int scales;
 } cn_search;
@@ -1064,8 +1066,7 @@ static lsm_status cn_general(const cn_corner *cc, const lsm_real dmax[2], lsm_re
     return LSM_OK;
 }
 
-lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                             lsm_corner_result *out)
+lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p, lsm_corner_result *out)
 {
     if (b1 == NULL || b2 == NULL || p == NULL || out == NULL)
         return LSM_E_NULL;

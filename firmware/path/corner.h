@@ -66,29 +66,29 @@
  * LSM_CORNER_DEFAULT_TRIM_FRACTION, LSM_CORNER_ANGLE_EPS_RAD): lsm_config.h. */
 
 typedef struct lsm_corner_params {
-    lsm_real tolerance_mm;   /* eps > 0: largest deviation (see above) */
-    lsm_real max_trim1_mm;   /* most cut from the end of block 1; <= 0: LSM_CORNER_DEFAULT_TRIM_FRACTION of it */
-    lsm_real max_trim2_mm;   /* most cut from the start of block 2; <= 0: the same fraction of block 2 */
+    lsm_real tolerance_mm; /* eps > 0: largest deviation (see above) */
+    lsm_real max_trim1_mm; /* most cut from the end of block 1; <= 0: LSM_CORNER_DEFAULT_TRIM_FRACTION of it */
+    lsm_real max_trim2_mm; /* most cut from the start of block 2; <= 0: the same fraction of block 2 */
 } lsm_corner_params;
 
 typedef struct lsm_corner_result {
-    lsm_geom trans[2];            /* clothoids A and B; A starts at p1, B ends at p2 */
-    lsm_real trim1_mm;            /* arc length removed from the end of block 1 */
-    lsm_real trim2_mm;            /* arc length removed from the start of block 2 */
-    lsm_real p1_mm[3];            /* new end of block 1 */
-    lsm_real p2_mm[3];            /* new start of block 2 */
-    lsm_real deviation_mm;        /* max(vertex_dev_mm, path_dev_mm) <= tolerance */
-    lsm_real vertex_dev_mm;       /* distance from the corner point to the transition */
-    lsm_real path_dev_mm;         /* largest distance of the transition from the programmed path */
-    lsm_real kappa_max_per_mm;    /* largest |kappa| on the transition (eq 7) */
+    lsm_geom trans[2];              /* clothoids A and B; A starts at p1, B ends at p2 */
+    lsm_real trim1_mm;              /* arc length removed from the end of block 1 */
+    lsm_real trim2_mm;              /* arc length removed from the start of block 2 */
+    lsm_real p1_mm[3];              /* new end of block 1 */
+    lsm_real p2_mm[3];              /* new start of block 2 */
+    lsm_real deviation_mm;          /* max(vertex_dev_mm, path_dev_mm) <= tolerance */
+    lsm_real vertex_dev_mm;         /* distance from the corner point to the transition */
+    lsm_real path_dev_mm;           /* largest distance of the transition from the programmed path */
+    lsm_real kappa_max_per_mm;      /* largest |kappa| on the transition (eq 7) */
     lsm_real sharpness_max_per_mm2; /* largest |c| on the transition (eq 8) */
-    lsm_real delta_rad;           /* deflection angle at the corner, in [0, pi) */
-    lsm_real gap_mm;              /* end of B vs p2 (solver residual) */
-    lsm_real gap_rad;             /* end tangent of B vs block 2's tangent at p2 */
-    uint16_t iterations;          /* Newton iterations, all scales */
-    uint8_t scales;               /* scales L tried */
-    uint8_t limited;              /* 1: the trim limits, not the tolerance, set the size */
-    uint8_t closed_form;          /* 1: line-line closed form */
+    lsm_real delta_rad;             /* deflection angle at the corner, in [0, pi) */
+    lsm_real gap_mm;                /* end of B vs p2 (solver residual) */
+    lsm_real gap_rad;               /* end tangent of B vs block 2's tangent at p2 */
+    uint16_t iterations;            /* Newton iterations, all scales */
+    uint8_t scales;                 /* scales L tried */
+    uint8_t limited;                /* 1: the trim limits, not the tolerance, set the size */
+    uint8_t closed_form;            /* 1: line-line closed form */
 } lsm_corner_result;
 
 /* Smooth the corner between b1 (ending at the corner) and b2 (starting there). p may not be NULL

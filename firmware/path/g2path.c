@@ -18,9 +18,9 @@ typedef struct {
 /* An element (or a polygon side) in plane coordinates, for distances. */
 typedef struct {
     bool arc, full;
-    lsm_real ax, ay, bx, by;  /* end points */
-    lsm_real cx, cy, r;       /* arc */
-    lsm_real mx, my, cw;      /* arc: mid radial direction, cos(half sweep) */
+    lsm_real ax, ay, bx, by; /* end points */
+    lsm_real cx, cy, r;      /* arc */
+    lsm_real mx, my, cw;     /* arc: mid radial direction, cos(half sweep) */
 } gp_elem2d;
 
 /* Split point walker. */
@@ -31,7 +31,10 @@ typedef struct {
     int e, m, ne, b_prev;
 } gp_walk;
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 static bool gp_plane_make(lsm_geom_plane plane, gp_plane *pl)
 {
@@ -397,9 +400,9 @@ static lsm_status gp_build(const lsm_geom *contour, int n_elems, const gp_plane 
     return LSM_OK;
 }
 
-static lsm_status gp_prepare(const lsm_geom *contour, int n_elems, lsm_geom_plane plane, lsm_real a_max,
-                             lsm_real j_max, const lsm_clothoid *out, const lsm_g2path_report *rep, gp_plane *pl,
-                             lsm_real *total, lsm_real *normal)
+static lsm_status gp_prepare(const lsm_geom *contour, int n_elems, lsm_geom_plane plane, lsm_real a_max, lsm_real j_max,
+                             const lsm_clothoid *out, const lsm_g2path_report *rep, gp_plane *pl, lsm_real *total,
+                             lsm_real *normal)
 {
     if (contour == NULL || out == NULL || rep == NULL)
         return LSM_E_NULL;

@@ -20,7 +20,10 @@ static lsm_status geom_check(const lsm_real *v, int n)
     return LSM_OK;
 }
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 
 static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
 {
@@ -31,8 +34,8 @@ static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
 
 static bool geom_orthonormal(const lsm_real e1[3], const lsm_real e2[3])
 {
-    return lsm_fabs(dot3(e1, e1) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL &&
-           lsm_fabs(dot3(e1, e2)) <= GEOM_ORTHO_TOL;
+    return lsm_fabs(dot3(e1, e1) - LSM_R(1.0)) <= GEOM_ORTHO_TOL &&
+           lsm_fabs(dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(dot3(e1, e2)) <= GEOM_ORTHO_TOL;
 }
 
 static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
@@ -330,7 +333,10 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
     return LSM_OK;
 }
 
-static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3]) { cross3(a->e1, a->e2, n); }
+static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3])
+{
+    cross3(a->e1, a->e2, n);
+}
 
 #if LSM_REAL_IS_FLOAT
 /* The in-plane chord from the start to the angle phi0 + dphi: 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 +
@@ -451,11 +457,20 @@ lsm_real lsm_geom_kappa(const lsm_geom *g, lsm_real s)
     return lsm_sqrt(dot3(cv, cv));
 }
 
-lsm_real lsm_geom_length(const lsm_geom *g) { return g ? g->len : LSM_R(0.0); }
+lsm_real lsm_geom_length(const lsm_geom *g)
+{
+    return g ? g->len : LSM_R(0.0);
+}
 
-void lsm_geom_start_tangent(const lsm_geom *g, lsm_real t[3]) { (void)lsm_geom_eval(g, LSM_R(0.0), NULL, t, NULL); }
+void lsm_geom_start_tangent(const lsm_geom *g, lsm_real t[3])
+{
+    (void)lsm_geom_eval(g, LSM_R(0.0), NULL, t, NULL);
+}
 
-void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3]) { (void)lsm_geom_eval(g, g->len, NULL, t, NULL); }
+void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3])
+{
+    (void)lsm_geom_eval(g, g->len, NULL, t, NULL);
+}
 
 bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
 {

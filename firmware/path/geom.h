@@ -39,11 +39,7 @@
 
 /* Compile-time settings (LSM_GEOM_ARC_TOL_MM): lsm_config.h. */
 
-typedef enum lsm_geom_kind {
-    LSM_GEOM_LINE = 1,
-    LSM_GEOM_ARC = 2,
-    LSM_GEOM_CLOTHOID = 3
-} lsm_geom_kind;
+typedef enum lsm_geom_kind { LSM_GEOM_LINE = 1, LSM_GEOM_ARC = 2, LSM_GEOM_CLOTHOID = 3 } lsm_geom_kind;
 
 typedef enum lsm_geom_plane {
     LSM_GEOM_PLANE_GENERAL = 0, /* any orthonormal (e1, e2) */
@@ -59,15 +55,15 @@ typedef struct lsm_geom_line {
 
 typedef struct lsm_geom_arc {
 #if LSM_REAL_IS_FLOAT
-    lsm_real start_mm[3];       /* the start point (exactly the programmed start of a G2/G3) */
+    lsm_real start_mm[3]; /* the start point (exactly the programmed start of a G2/G3) */
 #else
-    lsm_real centre_mm[3];      /* its coordinate along n is the start point's */
+    lsm_real centre_mm[3]; /* its coordinate along n is the start point's */
 #endif
-    lsm_real e1[3], e2[3];      /* orthonormal plane basis */
+    lsm_real e1[3], e2[3]; /* orthonormal plane basis */
     lsm_real radius_mm;
-    lsm_real phi0_rad;          /* start angle */
-    lsm_real sweep_rad;         /* signed swept angle (may exceed 2 pi with full turns) */
-    lsm_real axial_mm;          /* helix: displacement along n over the arc */
+    lsm_real phi0_rad;  /* start angle */
+    lsm_real sweep_rad; /* signed swept angle (may exceed 2 pi with full turns) */
+    lsm_real axial_mm;  /* helix: displacement along n over the arc */
 } lsm_geom_arc;
 
 typedef struct lsm_geom_clothoid {
@@ -79,10 +75,10 @@ typedef struct lsm_geom_clothoid {
 } lsm_geom_clothoid;
 
 typedef struct lsm_geom {
-    lsm_real len;           /* arc length: mm (rad for a rotary-only line) */
-    uint8_t kind;           /* lsm_geom_kind */
-    uint8_t plane;          /* lsm_geom_plane of an arc or clothoid, 0 for lines */
-    uint8_t rotary_only;    /* line that moves only A B C */
+    lsm_real len;        /* arc length: mm (rad for a rotary-only line) */
+    uint8_t kind;        /* lsm_geom_kind */
+    uint8_t plane;       /* lsm_geom_plane of an arc or clothoid, 0 for lines */
+    uint8_t rotary_only; /* line that moves only A B C */
     uint8_t reserved;
     union {
         lsm_geom_line line;

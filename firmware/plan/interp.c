@@ -40,11 +40,12 @@ static void sincos_small(lsm_real x, lsm_real *s, lsm_real *c)
         return;
     }
     const lsm_real x2 = x * x;
-    *s = x * (R1 - x2 * (R1 / LSM_R(6.0)) *
-                       (R1 - x2 * (R1 / LSM_R(20.0)) *
-                                 (R1 - x2 * (R1 / LSM_R(42.0)) *
-                                           (R1 - x2 * (R1 / LSM_R(72.0)) *
-                                                     (R1 - x2 * (R1 / LSM_R(110.0)) * (R1 - x2 * (R1 / LSM_R(156.0))))))));
+    *s = x *
+         (R1 - x2 * (R1 / LSM_R(6.0)) *
+                   (R1 - x2 * (R1 / LSM_R(20.0)) *
+                             (R1 - x2 * (R1 / LSM_R(42.0)) *
+                                       (R1 - x2 * (R1 / LSM_R(72.0)) *
+                                                 (R1 - x2 * (R1 / LSM_R(110.0)) * (R1 - x2 * (R1 / LSM_R(156.0))))))));
     *c = R1 - x2 * LSM_R(0.5) *
                   (R1 - x2 * (R1 / LSM_R(12.0)) *
                             (R1 - x2 * (R1 / LSM_R(30.0)) *
@@ -62,11 +63,12 @@ static void sincos_small(lsm_real x, lsm_real *s, lsm_real *c)
 static void sincos_m1_small(lsm_real x, lsm_real *s, lsm_real *cm1)
 {
     const lsm_real x2 = x * x;
-    *s = x * (R1 - x2 * (R1 / LSM_R(6.0)) * (R1 - x2 * (R1 / LSM_R(20.0)) *
-                                                    (R1 - x2 * (R1 / LSM_R(42.0)) * (R1 - x2 * (R1 / LSM_R(72.0))))));
+    *s =
+        x * (R1 - x2 * (R1 / LSM_R(6.0)) *
+                      (R1 - x2 * (R1 / LSM_R(20.0)) * (R1 - x2 * (R1 / LSM_R(42.0)) * (R1 - x2 * (R1 / LSM_R(72.0))))));
     *cm1 = -x2 * LSM_R(0.5) *
-           (R1 - x2 * (R1 / LSM_R(12.0)) * (R1 - x2 * (R1 / LSM_R(30.0)) * (R1 - x2 * (R1 / LSM_R(56.0)) *
-                                                                               (R1 - x2 * (R1 / LSM_R(90.0))))));
+           (R1 - x2 * (R1 / LSM_R(12.0)) *
+                     (R1 - x2 * (R1 / LSM_R(30.0)) * (R1 - x2 * (R1 / LSM_R(56.0)) * (R1 - x2 * (R1 / LSM_R(90.0))))));
 }
 
 /* The exact end of block id: where the next one starts (the end of the buffer for the last). */
@@ -501,8 +503,8 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     q->off_mm = w->off;
     q->v_mm_s = w->v;
     lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &NXT(ip));
-    const bool needed = w->kind == LSM_INTERP_SW_REST ||
-                        (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES);
+    const bool needed =
+        w->kind == LSM_INTERP_SW_REST || (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES);
     if (st != LSM_OK && w->mode == LSM_PIECE_HOLD && needed && w->v > R0) {
         /* a piece is needed here (the current one ends) and no hold fits yet: go on normally (planned stops
          * always exist), the hold takes effect at the next point where a = 0 */

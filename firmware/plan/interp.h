@@ -97,69 +97,69 @@ typedef enum lsm_interp_switch {
 /* A piece planned ahead (lsm_interp_prepare), which lives in the interpolator's second piece buffer, and the switch
  * point it starts at. */
 typedef struct lsm_interp_prep {
-    uint64_t cycle;       /* SW_SAMPLE: the cycle count it starts at */
-    uint32_t serial;      /* the piece it follows or replaces (SW_SAMPLE, SW_BOUNDARY); the last piece (SW_REST) */
-    uint32_t gen;         /* planner generation it was planned for */
-    uint32_t blk;         /* where it starts (block id, offset) and its speed there */
+    uint64_t cycle;  /* SW_SAMPLE: the cycle count it starts at */
+    uint32_t serial; /* the piece it follows or replaces (SW_SAMPLE, SW_BOUNDARY); the last piece (SW_REST) */
+    uint32_t gen;    /* planner generation it was planned for */
+    uint32_t blk;    /* where it starts (block id, offset) and its speed there */
     lsm_real off_mm;
     lsm_real v_mm_s;
-    uint8_t kind;         /* lsm_interp_switch */
-    uint8_t phase;        /* SW_BOUNDARY */
-    uint8_t ready;        /* the second piece buffer holds the piece */
-    uint8_t failed;       /* no piece fits at this switch point for this generation (do not try again) */
-    uint8_t mode;         /* lsm_piece_mode it was planned with */
+    uint8_t kind;   /* lsm_interp_switch */
+    uint8_t phase;  /* SW_BOUNDARY */
+    uint8_t ready;  /* the second piece buffer holds the piece */
+    uint8_t failed; /* no piece fits at this switch point for this generation (do not try again) */
+    uint8_t mode;   /* lsm_piece_mode it was planned with */
     uint8_t reserved[3];
-    uint32_t stale_seen;  /* the planner's invalidation count when it was planned (lsm_planner_stale_count) */
+    uint32_t stale_seen; /* the planner's invalidation count when it was planned (lsm_planner_stale_count) */
 } lsm_interp_prep;
 
 typedef struct lsm_interp {
     lsm_planner *pl;
-    lsm_piece pcs[2];            /* the piece being run (pcs[cur]) and the one planned ahead (the other): taking the
+    lsm_piece pcs[2]; /* the piece being run (pcs[cur]) and the one planned ahead (the other): taking the
                                     prepared piece swaps them, no copy in the control cycle */
     uint8_t cur;
-    uint8_t running;             /* pc is valid */
-    uint8_t state;               /* lsm_interp_state */
-    uint8_t hold_req;            /* feed hold requested (or 0 % override) */
-    uint8_t ovr_zero;            /* the hold comes from a 0 % override */
-    uint8_t phase;               /* current phase of pc */
-    uint8_t gkind;               /* kind of the current block */
-    uint16_t anchor;             /* cycles since the arc was re-anchored */
-    uint32_t gen;                /* planner generation of pc */
-    lsm_real tau;                /* time into the current phase at the last sample */
-    lsm_real sloc;               /* travel into the current phase at the last sample */
-    lsm_real rc, rs;             /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
-    lsm_real ce[2], se[2];       /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
-    lsm_real ee[2];              /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
-    lsm_real cd[2], sd[2];       /* per ramp: cos, sin of pi / n1 (one cycle) */
-    lsm_real v_mm_s;             /* feed at the last sample */
-    uint32_t act_blk;            /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
+    uint8_t running;       /* pc is valid */
+    uint8_t state;         /* lsm_interp_state */
+    uint8_t hold_req;      /* feed hold requested (or 0 % override) */
+    uint8_t ovr_zero;      /* the hold comes from a 0 % override */
+    uint8_t phase;         /* current phase of pc */
+    uint8_t gkind;         /* kind of the current block */
+    uint16_t anchor;       /* cycles since the arc was re-anchored */
+    uint32_t gen;          /* planner generation of pc */
+    lsm_real tau;          /* time into the current phase at the last sample */
+    lsm_real sloc;         /* travel into the current phase at the last sample */
+    lsm_real rc, rs;       /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
+    lsm_real ce[2], se[2]; /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
+    lsm_real ee[2];        /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
+    lsm_real cd[2], sd[2]; /* per ramp: cos, sin of pi / n1 (one cycle) */
+    lsm_real v_mm_s;       /* feed at the last sample */
+    uint32_t act_blk;      /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
     uint8_t act_ok;
     uint8_t reserved[3];
-    uint32_t blk;                /* path cursor: block id ... */
-    lsm_real off_mm;             /* ... and offset in it */
-    lsm_real ds_scale;           /* float: the piece's length over the sum of its phases (ds is scaled by it) */
-    lsm_real off_lo_mm;          /* float: what the additions to off_mm rounded off (compensated sum: the cursor
+    uint32_t blk;       /* path cursor: block id ... */
+    lsm_real off_mm;    /* ... and offset in it */
+    lsm_real ds_scale;  /* float: the piece's length over the sum of its phases (ds is scaled by it) */
+    lsm_real off_lo_mm; /* float: what the additions to off_mm rounded off (compensated sum: the cursor
                                     keeps the exact sum of the travel, no drift to snap back at a piece's end) */
-    uint32_t hz_blk;             /* end of the current ramp (commitment horizon) */
+    uint32_t hz_blk;    /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
-    lsm_real hz_v;               /* speed there (a = 0) */
-    lsm_real ac, as, aw;         /* arc: cos phi, sin phi, dphi/ds */
+    lsm_real hz_v;                           /* speed there (a = 0) */
+    lsm_real ac, as, aw;                     /* arc: cos phi, sin phi, dphi/ds */
     lsm_real a_p[3], a_A[3], a_B[3], a_L[3]; /* float arc anchor: P_a, A, B, L (above) */
-    lsm_real a_off;              /* float arc anchor: its offset s_a in the block */
-    lsm_real a_len;              /* float arc: the block's length when the anchor was set (a trim re-anchors) */
-    lsm_clothoid_stepper cs;     /* clothoid stepper */
-    lsm_real pos[LSM_MAX_AXES];  /* last setpoint */
-    lsm_real ovr;                /* requested override factor */
-    uint64_t cycles;             /* cycles stepped */
-    uint32_t replans;            /* pieces taken while moving (replanning) */
-    uint32_t plan_errors;        /* plan_piece calls that returned an error */
-    uint32_t serial;             /* pieces started */
-    uint32_t lead_cycles;        /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
-    uint32_t tick_plans;         /* pieces planned inside lsm_interp_step (none were prepared) */
-    uint8_t bg;                  /* lsm_interp_prepare is in use: the cycle plans only what it must */
+    lsm_real a_off;                          /* float arc anchor: its offset s_a in the block */
+    lsm_real a_len;             /* float arc: the block's length when the anchor was set (a trim re-anchors) */
+    lsm_clothoid_stepper cs;    /* clothoid stepper */
+    lsm_real pos[LSM_MAX_AXES]; /* last setpoint */
+    lsm_real ovr;               /* requested override factor */
+    uint64_t cycles;            /* cycles stepped */
+    uint32_t replans;           /* pieces taken while moving (replanning) */
+    uint32_t plan_errors;       /* plan_piece calls that returned an error */
+    uint32_t serial;            /* pieces started */
+    uint32_t lead_cycles;       /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
+    uint32_t tick_plans;        /* pieces planned inside lsm_interp_step (none were prepared) */
+    uint8_t bg;                 /* lsm_interp_prepare is in use: the cycle plans only what it must */
     uint8_t reserved2[3];
-    uint32_t prepared;           /* pieces planned by lsm_interp_prepare */
-    lsm_interp_prep prep;        /* the slot of lsm_interp_prepare */
+    uint32_t prepared;    /* pieces planned by lsm_interp_prepare */
+    lsm_interp_prep prep; /* the slot of lsm_interp_prepare */
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */

@@ -222,8 +222,8 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 
 /* The corner between the last block (prev) and g, which starts where prev ends. */
 typedef struct corner_try {
-    bool corner;            /* a clothoid pair replaces the corner: g1 is prev trimmed, cr the pair */
-    bool stop;              /* the machine stops at the junction */
+    bool corner; /* a clothoid pair replaces the corner: g1 is prev trimmed, cr the pair */
+    bool stop;   /* the machine stops at the junction */
     lsm_geom g1;
     lsm_corner_result cr;
 } corner_try;
@@ -245,7 +245,8 @@ static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *
     const lsm_real room = trim_room(pl, pl->tail - 1u, prev);
     lsm_corner_params cp;
     /* the corner gets what the fits of its two blocks left of the tolerance */
-    cp.tolerance_mm = lsm_max2(pl->tail_tol_mm - lsm_max2(pl->tail_fit_err, fit_err), CORNER_TOL_FLOOR * pl->tail_tol_mm);
+    cp.tolerance_mm =
+        lsm_max2(pl->tail_tol_mm - lsm_max2(pl->tail_fit_err, fit_err), CORNER_TOL_FLOOR * pl->tail_tol_mm);
     cp.max_trim1_mm = lsm_min2(pl->cfg.trim_share * prev->g.len, TRIM_ROOM_SHARE * room);
     cp.max_trim2_mm = pl->cfg.trim_share * g->len;
     lsm_corner_result *cr = &ct->cr;
@@ -280,8 +281,7 @@ static void push_corner(lsm_planner *pl, lsm_pblock *prev, const corner_try *ct,
 {
     prev->g = ct->g1;
     block_coef(pl, prev);
-    push_block(pl, &ct->cr.trans[0], prev->feed_mm_s, seq,
-               (uint8_t)(LSM_PB_CORNER | (prev->flags & LSM_PB_RAPID)));
+    push_block(pl, &ct->cr.trans[0], prev->feed_mm_s, seq, (uint8_t)(LSM_PB_CORNER | (prev->flags & LSM_PB_RAPID)));
     push_block(pl, &ct->cr.trans[1], feed, seq, (uint8_t)(LSM_PB_CORNER | (flags & LSM_PB_RAPID)));
     pl->stats.corners++;
 }

@@ -88,8 +88,8 @@ static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
 static bool run_element(const lsm_planner *pl, uint32_t n, lsm_geom *g, lsm_arcfit_result *fr)
 {
     const lsm_real tfit = pl->cfg.fit_share * pl->fit_tol;
-    bool fitted = n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, pl->tail_arc ? pl->tail_n : NULL,
-                                            g, fr);
+    bool fitted =
+        n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, pl->tail_arc ? pl->tail_n : NULL, g, fr);
     if (fitted && fr->kind == LSM_ARCFIT_ARC && (!arc_fits_tail(pl, fr) || !run_needs_fit(pl, n)))
         fitted = false;
     if (fitted && fr->kind == LSM_ARCFIT_LINE) {
@@ -219,8 +219,8 @@ static lsm_status add_fit_point(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES
                 return st;
         } else {
             const lsm_real *prev = pl->fit_n >= 2u ? pl->fit_pt[pl->fit_n - 2u].p : pl->tail_pos;
-            needs = pl->fit_need ||
-                    vertex_limits(pl, prev, pl->fit_pt[pl->fit_n - 1u].p, end, mv->tol_mm, mv->feed_mm_s);
+            needs =
+                pl->fit_need || vertex_limits(pl, prev, pl->fit_pt[pl->fit_n - 1u].p, end, mv->tol_mm, mv->feed_mm_s);
         }
     }
     uint32_t slots = run_slots(pl, pl->fit_n + 1u, fits, &fr, needs);

@@ -25,13 +25,13 @@ static lsm_real ramp_time_cont(lsm_real dv, lsm_real a, lsm_real j, lsm_real s)
 {
     if (!(dv > R0))
         return R0;
-    lsm_real t1 = PI_R * j / (LSM_R(2.0) * s);                          /* eq 25 */
-    t1 = lsm_min2(t1, lsm_sqrt(PI_R * a / (LSM_R(2.0) * s)));          /* eq 26 */
-    t1 = lsm_min2(t1, lsm_cbrt(PI_R * dv / (LSM_R(4.0) * s)));         /* eq 29 */
-    const lsm_real jc = LSM_R(2.0) * t1 * s / PI_R;                    /* eq 32 */
+    lsm_real t1 = PI_R * j / (LSM_R(2.0) * s);                 /* eq 25 */
+    t1 = lsm_min2(t1, lsm_sqrt(PI_R * a / (LSM_R(2.0) * s)));  /* eq 26 */
+    t1 = lsm_min2(t1, lsm_cbrt(PI_R * dv / (LSM_R(4.0) * s))); /* eq 29 */
+    const lsm_real jc = LSM_R(2.0) * t1 * s / PI_R;            /* eq 32 */
     const lsm_real t2 = lsm_max2(lsm_min2(a / jc - t1, lsm_sqrt(t1 * t1 / LSM_R(4.0) + dv / jc) - LSM_R(1.5) * t1), R0);
-    const lsm_real ap = jc * (t1 + t2);                                /* eq 23 */
-    const lsm_real t4 = lsm_max2(dv / ap - LSM_R(2.0) * t1 - t2, R0);  /* eq 31 */
+    const lsm_real ap = jc * (t1 + t2);                               /* eq 23 */
+    const lsm_real t4 = lsm_max2(dv / ap - LSM_R(2.0) * t1 - t2, R0); /* eq 31 */
     return LSM_R(4.0) * t1 + LSM_R(2.0) * t2 + t4;
 }
 
@@ -55,15 +55,15 @@ lsm_real lsm_pl_speed_for_dist(lsm_real w, lsm_real D, lsm_real a, lsm_real j, l
 }
 
 /* Highest cruise vc in [max(v0, v1), vmax] for which two continuous ramps v0 -> vc -> v1 fit in distance D. */
-lsm_real lsm_pl_cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a, lsm_real j, lsm_real s,
-                                lsm_real vmax)
+lsm_real lsm_pl_cruise_for_dist(lsm_real v0, lsm_real v1, lsm_real D, lsm_real a, lsm_real j, lsm_real s, lsm_real vmax)
 {
     lsm_real lo = lsm_max2(v0, v1), hi = vmax;
     if (!(hi > lo) || !(D > R0))
         return lo;
     for (int it = 0; it < PROBE_ITER && hi - lo > SPEED_RES * PROBE_RES_SHARE * hi; it++) {
         const lsm_real mid = it == 0 ? hi : (lo + hi) / LSM_R(2.0);
-        const lsm_real d = (v0 + mid) * ramp_time_cont(mid - v0, a, j, s) + (mid + v1) * ramp_time_cont(mid - v1, a, j, s);
+        const lsm_real d =
+            (v0 + mid) * ramp_time_cont(mid - v0, a, j, s) + (mid + v1) * ramp_time_cont(mid - v1, a, j, s);
         if (d <= LSM_R(2.0) * D) {
             if (it == 0)
                 return hi;
@@ -150,14 +150,14 @@ bool lsm_pl_arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v)
 
 /* Valley detection while walking backwards (see planner.h: nodes at valleys and significant drops). */
 typedef struct vstate {
-    lsm_real M;       /* highest cap since the last node (walking back) */
-    lsm_real m;       /* lowest cap after the peak */
+    lsm_real M; /* highest cap since the last node (walking back) */
+    lsm_real m; /* lowest cap after the peak */
     uint32_t m_id;
     uint8_t desc;
     uint8_t has_last;
     lsm_real last_c;
     uint32_t last_id;
-    lsm_real lo;      /* lowest cap since the last node */
+    lsm_real lo; /* lowest cap since the last node */
 } vstate;
 
 static void vreset(vstate *s)

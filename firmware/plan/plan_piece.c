@@ -19,10 +19,10 @@
 /* pieces                                                                                                       */
 
 typedef struct plan5 {
-    bool step;        /* ramp A is one step of a staircase (the interpolator re-plans at its end) */
+    bool step; /* ramp A is one step of a staircase (the interpolator re-plans at its end) */
     lsm_real v0, vc, v1;
     ramp A, B;
-    lsm_real xA, xB;  /* ramp starts (piece-relative); lead cruise [0, xA], cruise [xA + A.dist, xB],
+    lsm_real xA, xB; /* ramp starts (piece-relative); lead cruise [0, xA], cruise [xA + A.dist, xB],
                          trail cruise [xB + B.dist, D] */
 } plan5;
 
@@ -433,7 +433,7 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
 /* The state of one forward search (plan_normal) over its candidate nodes. */
 typedef struct search {
     lsm_planner *pl;
-    uint32_t id0;        /* the start: block, offset, speed (a = 0) */
+    uint32_t id0; /* the start: block, offset, speed (a = 0) */
     lsm_real off0, v0;
     pctx pc;             /* the piece to the candidate node (the last one tried) */
     lsm_real w1;         /* W of the candidate node */

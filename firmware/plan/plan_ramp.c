@@ -155,12 +155,14 @@ static lsm_real ramp_speak(const ramp *r, lsm_real dt)
 }
 
 /* sin and cos of pi q / 8, q = 0..8 */
-static const lsm_real k_sin8[9] = {LSM_R(0.0), LSM_R(0.38268343236508977), LSM_R(0.70710678118654752),
-                                   LSM_R(0.92387953251128676), LSM_R(1.0), LSM_R(0.92387953251128676),
-                                   LSM_R(0.70710678118654752), LSM_R(0.38268343236508977), LSM_R(0.0)};
-static const lsm_real k_cos8[9] = {LSM_R(1.0), LSM_R(0.92387953251128676), LSM_R(0.70710678118654752),
-                                   LSM_R(0.38268343236508977), LSM_R(0.0), LSM_R(-0.38268343236508977),
-                                   LSM_R(-0.70710678118654752), LSM_R(-0.92387953251128676), LSM_R(-1.0)};
+static const lsm_real k_sin8[9] =
+    {LSM_R(0.0), LSM_R(0.38268343236508977), LSM_R(0.70710678118654752), LSM_R(0.92387953251128676),
+     LSM_R(1.0), LSM_R(0.92387953251128676), LSM_R(0.70710678118654752), LSM_R(0.38268343236508977),
+     LSM_R(0.0)};
+static const lsm_real k_cos8[9] =
+    {LSM_R(1.0), LSM_R(0.92387953251128676),  LSM_R(0.70710678118654752),  LSM_R(0.38268343236508977),
+     LSM_R(0.0), LSM_R(-0.38268343236508977), LSM_R(-0.70710678118654752), LSM_R(-0.92387953251128676),
+     LSM_R(-1.0)};
 
 /* State after tau into a phase of length T, given sin and cos of phi = pi tau / T (sin² phases). */
 static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi,
@@ -190,10 +192,10 @@ static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_rea
 }
 
 typedef struct rcheck {
-    lsm_real ra, rj, rs;  /* >= 1: the budgets hold; < 1: scale the ramp's a, j, snap by this */
-    int vviol;            /* a speed above a block's cap */
-    lsm_real vx0, vx1;    /* that block's extent (x) */
-    lsm_real vcap;        /* and its cap */
+    lsm_real ra, rj, rs; /* >= 1: the budgets hold; < 1: scale the ramp's a, j, snap by this */
+    int vviol;           /* a speed above a block's cap */
+    lsm_real vx0, vx1;   /* that block's extent (x) */
+    lsm_real vcap;       /* and its cap */
 } rcheck;
 
 /* One sub-interval against the blocks it touches. */
@@ -452,12 +454,16 @@ static int tune_ramp(pctx *pc, ramp *r, lsm_real v0, lsm_real v1, bool anchor_en
                 return 1;
             /* try faster */
             ups++;
-            const lsm_real na = c->ra > room ? lsm_min2(ramp_apeak(r, dt) * c->ra * TUNE_UP_SHARE, r->a_lim * TUNE_UP_MAX) : r->a_lim;
-            const lsm_real nj = c->rj > room ? lsm_min2(lsm_fabs(r->jp) * c->rj * TUNE_UP_SHARE, r->j_lim * TUNE_UP_MAX) : r->j_lim;
-            const lsm_real ns = c->rs > room ? lsm_min2(ramp_speak(r, dt) * c->rs * TUNE_UP_SHARE, r->s_lim * TUNE_UP_MAX) : r->s_lim;
+            const lsm_real na =
+                c->ra > room ? lsm_min2(ramp_apeak(r, dt) * c->ra * TUNE_UP_SHARE, r->a_lim * TUNE_UP_MAX) : r->a_lim;
+            const lsm_real nj =
+                c->rj > room ? lsm_min2(lsm_fabs(r->jp) * c->rj * TUNE_UP_SHARE, r->j_lim * TUNE_UP_MAX) : r->j_lim;
+            const lsm_real ns =
+                c->rs > room ? lsm_min2(ramp_speak(r, dt) * c->rs * TUNE_UP_SHARE, r->s_lim * TUNE_UP_MAX) : r->s_lim;
             if (!(na > r->a_lim || nj > r->j_lim || ns > r->s_lim))
                 return 1;
-            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(na, r->a_lim), lsm_max2(nj, r->j_lim), lsm_max2(ns, r->s_lim)) ||
+            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(na, r->a_lim), lsm_max2(nj, r->j_lim),
+                                  lsm_max2(ns, r->s_lim)) ||
                 lsm_scurve_total_cycles(&r->iv) >= lsm_scurve_total_cycles(&best.iv)) {
                 *r = best;
                 return 1;

@@ -41,8 +41,8 @@ lsm_status lsm_pl_check_vals(const lsm_real *v, int n)
 
 static lsm_status check_config(const lsm_planner_config *c)
 {
-    const lsm_real sc[8] = {c->cycle_s, c->cap_margin, c->path_a_max_mm_s2, c->path_j_max_mm_s3,
-                            c->node_hyst, c->node_drop, c->trim_share, c->fit_share};
+    const lsm_real sc[8] = {c->cycle_s,   c->cap_margin, c->path_a_max_mm_s2, c->path_j_max_mm_s3,
+                            c->node_hyst, c->node_drop,  c->trim_share,       c->fit_share};
     lsm_status st = lsm_pl_check_vals(sc, 8);
     if (st != LSM_OK)
         return st;
@@ -192,8 +192,8 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
     return st;
 }
 
-lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3], lsm_geom_plane plane,
-                                  int dir, uint32_t turns, const lsm_planner_move *mv)
+lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3],
+                                  lsm_geom_plane plane, int dir, uint32_t turns, const lsm_planner_move *mv)
 {
     if (end == NULL || centre == NULL)
         return LSM_E_NULL;
@@ -224,8 +224,10 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
         return st;
     /* the arc's plane must lie in the existing axes */
     for (int i = 0; i < 3; i++)
-        if (!(pl->cfg.axis_mask & (1u << i)) &&
-            (g.u.arc.e1[i] != R0 || g.u.arc.e2[i] != R0 || (g.u.arc.axial_mm != R0 && i == (plane == LSM_GEOM_PLANE_XY ? 2 : plane == LSM_GEOM_PLANE_ZX ? 1 : 0))))
+        if (!(pl->cfg.axis_mask & (1u << i)) && (g.u.arc.e1[i] != R0 || g.u.arc.e2[i] != R0 ||
+                                                 (g.u.arc.axial_mm != R0 && i == (plane == LSM_GEOM_PLANE_XY   ? 2
+                                                                                  : plane == LSM_GEOM_PLANE_ZX ? 1
+                                                                                                               : 0))))
             return LSM_E_PL_AXIS;
     if (!(g.len > LEN_EPS))
         return LSM_E_ZERO_LENGTH;

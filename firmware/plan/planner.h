@@ -132,38 +132,38 @@ typedef struct lsm_planner_axis {
 } lsm_planner_axis;
 
 typedef struct lsm_planner_config {
-    lsm_real cycle_s;                     /* control cycle */
-    uint8_t axis_mask;                    /* bit k: axis k (X Y Z A B C) exists; the others must never move */
-    lsm_planner_axis axis[LSM_MAX_AXES];  /* limits of the existing axes */
-    lsm_real cap_margin;                  /* rho in (0, 1) */
-    lsm_real path_a_max_mm_s2;            /* optional tangential-frame limits (eqs 7, 8); 0: none */
+    lsm_real cycle_s;                    /* control cycle */
+    uint8_t axis_mask;                   /* bit k: axis k (X Y Z A B C) exists; the others must never move */
+    lsm_planner_axis axis[LSM_MAX_AXES]; /* limits of the existing axes */
+    lsm_real cap_margin;                 /* rho in (0, 1) */
+    lsm_real path_a_max_mm_s2;           /* optional tangential-frame limits (eqs 7, 8); 0: none */
     lsm_real path_j_max_mm_s3;
-    lsm_real node_hyst;                   /* [0, 1) */
-    lsm_real node_drop;                   /* (0, 1) */
-    lsm_real trim_share;                  /* (0, 0.5] */
-    lsm_real fit_share;                   /* [0, 1): share of the blend tolerance used to fit arcs through dense G1
+    lsm_real node_hyst;  /* [0, 1) */
+    lsm_real node_drop;  /* (0, 1) */
+    lsm_real trim_share; /* (0, 0.5] */
+    lsm_real fit_share;  /* [0, 1): share of the blend tolerance used to fit arcs through dense G1
                                              polylines (arcfit.h); 0 turns fitting off */
 } lsm_planner_config;
 
 /* One look-ahead block (caller storage). */
 typedef struct lsm_pblock {
-    lsm_geom g;               /* geometry (geom.h) */
-    lsm_real feed_mm_s;       /* programmed feed (path units / s); LSM_REAL_MAX for rapids */
-    lsm_real cap_geo_mm_s;    /* speed cap from the axis limits and the geometry (no feed, no override) */
-    lsm_real w_mm_s;          /* W of the node starting here (backward pass), when LSM_PB_NODE */
-    uint32_t seq;             /* the caller's tag (source line) */
-    uint16_t coef[6];         /* alpha_a, beta_a, alpha_j, beta_j, gamma_j, alpha_s as bfloat16, rounded up */
-    uint8_t flags;            /* LSM_PB_* */
+    lsm_geom g;            /* geometry (geom.h) */
+    lsm_real feed_mm_s;    /* programmed feed (path units / s); LSM_REAL_MAX for rapids */
+    lsm_real cap_geo_mm_s; /* speed cap from the axis limits and the geometry (no feed, no override) */
+    lsm_real w_mm_s;       /* W of the node starting here (backward pass), when LSM_PB_NODE */
+    uint32_t seq;          /* the caller's tag (source line) */
+    uint16_t coef[6];      /* alpha_a, beta_a, alpha_j, beta_j, gamma_j, alpha_s as bfloat16, rounded up */
+    uint8_t flags;         /* LSM_PB_* */
     uint8_t reserved;
 } lsm_pblock;
 
 /* What comes with a block. */
 typedef struct lsm_planner_move {
-    lsm_real feed_mm_s;   /* programmed feed > 0 (mm/s; rad/s for a rotary-only line); ignored for rapids */
-    lsm_real tol_mm;      /* corner at the END of this block: > 0 blends within this deviation (G64 P),
+    lsm_real feed_mm_s; /* programmed feed > 0 (mm/s; rad/s for a rotary-only line); ignored for rapids */
+    lsm_real tol_mm;    /* corner at the END of this block: > 0 blends within this deviation (G64 P),
                              0 stops exactly there (G61) */
-    uint32_t seq;         /* tag (e.g. the source line), reported back */
-    uint8_t rapid;        /* G0: feed = the axes' v_max */
+    uint32_t seq;       /* tag (e.g. the source line), reported back */
+    uint8_t rapid;      /* G0: feed = the axes' v_max */
 } lsm_planner_move;
 
 /* One phase of a piece: a sin² jerk rise or fall, constant jerk, or a cruise. */
@@ -178,29 +178,29 @@ typedef struct lsm_piece_phase {
 
 /* One piece of the tangential profile, ready for the interpolator. It ends exactly on its end point. */
 typedef struct lsm_piece {
-    uint32_t blk;                          /* id of the block where it starts */
-    lsm_real off_mm;                       /* offset into that block */
-    lsm_real len_mm;                       /* distance to its end (a node, the end of the buffer, or a hold) */
+    uint32_t blk;    /* id of the block where it starts */
+    lsm_real off_mm; /* offset into that block */
+    lsm_real len_mm; /* distance to its end (a node, the end of the buffer, or a hold) */
     lsm_real v0_mm_s, v1_mm_s, vc_mm_s;
-    uint32_t end_blk;                      /* it ends at the start of this block (tail: the end of the buffer) */
-    lsm_real T_s;                          /* duration */
-    uint8_t stop;                          /* ends with v = 0 */
-    uint8_t hold;                          /* a feed-hold stop (ends anywhere) */
-    uint8_t step;                          /* ramp A is a step of a staircase: re-plan at its end */
+    uint32_t end_blk; /* it ends at the start of this block (tail: the end of the buffer) */
+    lsm_real T_s;     /* duration */
+    uint8_t stop;     /* ends with v = 0 */
+    uint8_t hold;     /* a feed-hold stop (ends anywhere) */
+    uint8_t step;     /* ramp A is a step of a staircase: re-plan at its end */
     uint8_t reserved;
-    lsm_piece_phase ph[LSM_PIECE_PHASES];  /* lead cruise, ramp A (7), cruise, ramp B (7), trail cruise */
-    lsm_kin st[LSM_PIECE_PHASES];          /* state at each phase start (s piece-relative) */
+    lsm_piece_phase ph[LSM_PIECE_PHASES]; /* lead cruise, ramp A (7), cruise, ramp B (7), trail cruise */
+    lsm_kin st[LSM_PIECE_PHASES];         /* state at each phase start (s piece-relative) */
 } lsm_piece;
 
 typedef struct lsm_planner_stats {
-    uint32_t appended;        /* blocks accepted by append */
-    uint32_t corners;         /* corners smoothed with a clothoid pair */
-    uint32_t corner_stops;    /* corners where the machine must stop */
-    uint32_t horizon_stops;   /* of these: junctions made exact stops because the interpolator was too close */
-    uint32_t pieces;          /* pieces planned */
-    uint32_t plan_fallbacks;  /* pieces that needed the conservative fallback (should stay 0) */
-    uint32_t checks;          /* ramp verifications (cost indicator) */
-    uint32_t bp_nodes;        /* node evaluations in backward passes */
+    uint32_t appended;       /* blocks accepted by append */
+    uint32_t corners;        /* corners smoothed with a clothoid pair */
+    uint32_t corner_stops;   /* corners where the machine must stop */
+    uint32_t horizon_stops;  /* of these: junctions made exact stops because the interpolator was too close */
+    uint32_t pieces;         /* pieces planned */
+    uint32_t plan_fallbacks; /* pieces that needed the conservative fallback (should stay 0) */
+    uint32_t checks;         /* ramp verifications (cost indicator) */
+    uint32_t bp_nodes;       /* node evaluations in backward passes */
 } lsm_planner_stats;
 
 /* The requests of the control cycle (interp.c's lsm_interp_step, the tick) to the planner, which belongs to the
@@ -210,57 +210,57 @@ typedef struct lsm_planner_stats {
  * (lsm_atomic.h); the background applies them (lsm_planner_apply_requests) at the start of every background call
  * of this header, and lsm_planner_free / count / block count the posted release at once. */
 typedef struct lsm_planner_req {
-    lsm_atomic_u32 seq;           /* sequence counter: odd while the tick writes */
-    lsm_atomic_u32 release_blk;   /* the tick is done with the blocks before this id (only grows) */
-    lsm_atomic_u32 hz_posted;     /* a horizon was posted */
-    lsm_atomic_u32 hz_blk;        /* lsm_planner_set_horizon's blk, off_mm, v_mm_s, end_blk, end_v_mm_s */
+    lsm_atomic_u32 seq;         /* sequence counter: odd while the tick writes */
+    lsm_atomic_u32 release_blk; /* the tick is done with the blocks before this id (only grows) */
+    lsm_atomic_u32 hz_posted;   /* a horizon was posted */
+    lsm_atomic_u32 hz_blk;      /* lsm_planner_set_horizon's blk, off_mm, v_mm_s, end_blk, end_v_mm_s */
     lsm_atomic_real hz_off, hz_v;
     lsm_atomic_u32 hz_end;
     lsm_atomic_real hz_end_v;
-    lsm_atomic_u32 end_changes;   /* posts whose end (end_blk, end_v) differed from the one before */
-    lsm_atomic_u32 stale_ack;     /* the stale_set value the tick's present piece was planned on */
+    lsm_atomic_u32 end_changes; /* posts whose end (end_blk, end_v) differed from the one before */
+    lsm_atomic_u32 stale_ack;   /* the stale_set value the tick's present piece was planned on */
 } lsm_planner_req;
 
 typedef struct lsm_planner {
     lsm_planner_config cfg;
     lsm_pblock *blk;
-    uint32_t cap;               /* storage size */
-    uint32_t head_slot;         /* storage slot of block id `head` */
-    uint32_t head, tail;        /* ids of the blocks held: [head, tail) */
+    uint32_t cap;                     /* storage size */
+    uint32_t head_slot;               /* storage slot of block id `head` */
+    uint32_t head, tail;              /* ids of the blocks held: [head, tail) */
     lsm_real tail_pos[LSM_MAX_AXES];  /* geometric end of the last block (where the next one starts) */
     lsm_real tail_prog[LSM_MAX_AXES]; /* programmed end of the last block (the exact end of the program) */
-    lsm_real tail_tol_mm;       /* tolerance for the corner at the end of the last block */
-    uint8_t tail_rotary;        /* the last block moves A B C */
-    uint8_t finished;           /* lsm_planner_finish was called */
-    uint8_t full_pass;          /* the next backward pass must cover the whole buffer */
+    lsm_real tail_tol_mm;             /* tolerance for the corner at the end of the last block */
+    uint8_t tail_rotary;              /* the last block moves A B C */
+    uint8_t finished;                 /* lsm_planner_finish was called */
+    uint8_t full_pass;                /* the next backward pass must cover the whole buffer */
     uint8_t reserved;
     lsm_real ovr_near, ovr_far; /* feed override (factor) for blocks below / from ovr_switch */
     uint32_t ovr_switch;
-    uint32_t horizon_blk;       /* the interpolator is committed up to here (block id, offset), where it will */
-    lsm_real horizon_off;       /* be able to re-plan (a = 0) at speed horizon_v */
+    uint32_t horizon_blk; /* the interpolator is committed up to here (block id, offset), where it will */
+    lsm_real horizon_off; /* be able to re-plan (a = 0) at speed horizon_v */
     lsm_real horizon_v;
-    uint32_t horizon_end;       /* its current piece ends at the start of this block (the tail: the buffer's end) */
-    lsm_real horizon_end_v;     /* at this speed (a = 0): the W of that node must stay at least this */
-    lsm_atomic_u32 stale_set;   /* counts invalidations of the interpolator's current piece (a corner trimmed the
+    uint32_t horizon_end;     /* its current piece ends at the start of this block (the tail: the buffer's end) */
+    lsm_real horizon_end_v;   /* at this speed (a = 0): the W of that node must stay at least this */
+    lsm_atomic_u32 stale_set; /* counts invalidations of the interpolator's current piece (a corner trimmed the
                                    block it ends in, or its end speed no longer goes on): while it differs from
                                    req.stale_ack the piece is stale (lsm_planner_piece_stale) and a new piece must
                                    start at the horizon (verified to exist there). Background-written. */
-    uint8_t commit_dirty;       /* the commitment changed since it was last verified in full */
+    uint8_t commit_dirty;     /* the commitment changed since it was last verified in full */
     uint8_t reserved3[3];
-    uint32_t req_seq_applied;   /* req.seq when the requests were last applied */
+    uint32_t req_seq_applied;     /* req.seq when the requests were last applied */
     uint32_t end_changes_applied; /* req.end_changes then */
-    lsm_planner_req req;        /* the tick's requests (above) */
-    uint32_t bp_stop;           /* the last backward pass left the nodes before this block unchanged */
-    uint32_t gen;               /* changes whenever the plan may change (append, override, finish) */
+    lsm_planner_req req;          /* the tick's requests (above) */
+    uint32_t bp_stop;             /* the last backward pass left the nodes before this block unchanged */
+    uint32_t gen;                 /* changes whenever the plan may change (append, override, finish) */
     /* polyline fitting: the G1 points pending since the last block emitted (they start at tail_pos) */
     lsm_arcfit_pt fit_pt[LSM_ARCFIT_MAX];
     uint32_t fit_n;
     lsm_real fit_feed, fit_tol;
-    lsm_real tail_fit_err;      /* fitting error of the last block (its corners get the rest of the tolerance) */
-    lsm_real tail_n[3];         /* the last block is a fitted arc with this plane normal (tail_arc) */
+    lsm_real tail_fit_err; /* fitting error of the last block (its corners get the rest of the tolerance) */
+    lsm_real tail_n[3];    /* the last block is a fitted arc with this plane normal (tail_arc) */
     uint8_t tail_arc;
-    uint8_t fit_need;           /* a vertex of the pending run limits the feed (its arc fit is used) */
-    uint8_t fit_slots;          /* slots the pending run takes when it is emitted (reserved as it grows) */
+    uint8_t fit_need;  /* a vertex of the pending run limits the feed (its arc fit is used) */
+    uint8_t fit_slots; /* slots the pending run takes when it is emitted (reserved as it grows) */
     uint8_t reserved2;
     lsm_planner_stats stats;
 } lsm_planner;
@@ -293,8 +293,8 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
  * plane, dir = +1 (G3) or -1 (G2), plus `turns` full turns (geom.h). A B C stay where they are.
  * Errors: as lsm_planner_append_line, plus LSM_E_ARG and LSM_E_ARC_GEOMETRY (geom.h). Background.
  */
-lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3], lsm_geom_plane plane,
-                                  int dir, uint32_t turns, const lsm_planner_move *mv);
+lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const lsm_real centre[3],
+                                  lsm_geom_plane plane, int dir, uint32_t turns, const lsm_planner_move *mv);
 
 /* End of program: the last block ends with an exact stop on its programmed end point (pending points are
  * emitted first). Errors: LSM_E_NULL, LSM_E_FULL (room for the pending points is missing: run the interpolator

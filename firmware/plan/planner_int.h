@@ -116,12 +116,12 @@ static inline lsm_real cap_of(const lsm_planner *pl, uint32_t id)
 
 typedef struct pctx {
     const lsm_planner *pl;
-    uint32_t id0;     /* first block */
-    lsm_real off0;    /* start offset in it */
-    uint32_t id_end;  /* one past the last block */
-    lsm_real D;       /* length from the start to the start of id_end */
-    lsm_real floor;   /* feed caps raised to this (override catch-up) */
-    uint32_t cid;     /* cursor: block cid starts at x = cx */
+    uint32_t id0;    /* first block */
+    lsm_real off0;   /* start offset in it */
+    uint32_t id_end; /* one past the last block */
+    lsm_real D;      /* length from the start to the start of id_end */
+    lsm_real floor;  /* feed caps raised to this (override catch-up) */
+    uint32_t cid;    /* cursor: block cid starts at x = cx */
     lsm_real cx;
 } pctx;
 

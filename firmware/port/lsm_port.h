@@ -48,7 +48,7 @@
 /* ---- GPIO, by logical function ---- */
 
 typedef enum lsm_gpio_in {
-    LSM_GPIO_IN_ESTOP = 0,   /* emergency stop: active = stop requested (fail-safe wiring) */
+    LSM_GPIO_IN_ESTOP = 0, /* emergency stop: active = stop requested (fail-safe wiring) */
     LSM_GPIO_IN_COUNT
 } lsm_gpio_in;
 

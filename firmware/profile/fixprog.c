@@ -70,7 +70,8 @@ lsm_status lsm_fixprog_compile(lsm_fixprog *out, const lsm_move *mv, const lsm_r
                 ok = ok && to_q(J / 6, TWO52, &a->j3_q52);
                 a->jk8_q32 = a->jk16_q32 = 0;
             } else {
-                ok = ok && to_q(J / 12, TWO52, &a->j3_q52) && to_q32(J * n1 * n1 / (2 * LSM_PI * LSM_PI), &a->jk8_q32) &&
+                ok = ok && to_q(J / 12, TWO52, &a->j3_q52) &&
+                     to_q32(J * n1 * n1 / (2 * LSM_PI * LSM_PI), &a->jk8_q32) &&
                      to_q32(J * n1 * n1 * n1 / (2 * LSM_PI * LSM_PI * LSM_PI), &a->jk16_q32);
             }
             if (!ok)

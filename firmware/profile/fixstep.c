@@ -12,8 +12,8 @@ static inline int64_t wmul(int64_t a, int64_t b)
 /* (a * s) >> 30 for a in Q32 (any int64) and s in Q30 (|s| <= 2^30), without 128-bit arithmetic. */
 static inline int64_t mul_q30(int64_t a, int32_t s)
 {
-    const int64_t hi = a >> 32;                  /* signed high word */
-    const int64_t lo = (int64_t)(uint32_t)a;     /* unsigned low word, < 2^32 */
+    const int64_t hi = a >> 32;                         /* signed high word */
+    const int64_t lo = (int64_t)(uint32_t)a;            /* unsigned low word, < 2^32 */
     return wmul(hi * 4, s) + ((lo * (int64_t)s) >> 30); /* hi*s*2^32/2^30 + lo*s/2^30 */
 }
 

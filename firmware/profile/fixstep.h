@@ -44,9 +44,9 @@ typedef struct lsm_fix_axis_phase {
 
 typedef struct lsm_fix_phase {
     uint32_t n_cycles;
-    uint8_t shape;     /* 0 rise, 1 constant, 2 fall (lsm_phase_shape) */
-    int32_t cd_q30;    /* cos(pi / n1), Q30 */
-    int32_t sd_q30;    /* sin(pi / n1), Q30 */
+    uint8_t shape;  /* 0 rise, 1 constant, 2 fall (lsm_phase_shape) */
+    int32_t cd_q30; /* cos(pi / n1), Q30 */
+    int32_t sd_q30; /* sin(pi / n1), Q30 */
 } lsm_fix_phase;
 
 typedef struct lsm_fixprog {
@@ -59,9 +59,9 @@ typedef struct lsm_fixprog {
 
 typedef struct lsm_fixstep {
     const lsm_fixprog *prog;
-    uint32_t k;       /* cycles emitted */
+    uint32_t k; /* cycles emitted */
     uint8_t phase;
-    uint32_t m;       /* cycles into the phase */
+    uint32_t m; /* cycles into the phase */
     int32_t c_q30, s_q30;
 } lsm_fixstep;
 

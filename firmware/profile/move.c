@@ -294,8 +294,8 @@ static lsm_status validate(const lsm_move_request *req)
     bool moving = false;
     for (unsigned i = 0; i < req->n_axes; i++) {
         const lsm_axis_limits *L = &req->lim[i];
-        const lsm_real vals[6] = {req->distance_mm[i], req->v0_mm_s[i], req->v1_mm_s[i], L->v_max_mm_s,
-                                  L->a_max_mm_s2, L->j_max_mm_s3};
+        const lsm_real vals[6] = {req->distance_mm[i], req->v0_mm_s[i], req->v1_mm_s[i],
+                                  L->v_max_mm_s,       L->a_max_mm_s2,  L->j_max_mm_s3};
         for (int k = 0; k < 6; k++) {
             lsm_status st = (lsm_status)lsm_check_finite(vals[k]);
             if (st != LSM_OK)

@@ -40,30 +40,30 @@ typedef struct lsm_axis_limits {
 
 /* What a caller asks for. Unused axes (index >= n_axes) are ignored. */
 typedef struct lsm_move_request {
-    uint8_t n_axes;                           /* 1 .. LSM_MAX_AXES */
-    lsm_real cycle_s;                         /* control cycle */
+    uint8_t n_axes;   /* 1 .. LSM_MAX_AXES */
+    lsm_real cycle_s; /* control cycle */
     lsm_scurve_rule rule;
-    lsm_real distance_mm[LSM_MAX_AXES];       /* signed */
-    lsm_real v0_mm_s[LSM_MAX_AXES];           /* start feed along the direction of travel, >= 0 */
-    lsm_real v1_mm_s[LSM_MAX_AXES];           /* end feed along the direction of travel, >= 0 */
+    lsm_real distance_mm[LSM_MAX_AXES]; /* signed */
+    lsm_real v0_mm_s[LSM_MAX_AXES];     /* start feed along the direction of travel, >= 0 */
+    lsm_real v1_mm_s[LSM_MAX_AXES];     /* end feed along the direction of travel, >= 0 */
     lsm_axis_limits lim[LSM_MAX_AXES];
 } lsm_move_request;
 
 /* One axis of a planned move. */
 typedef struct lsm_move_axis {
-    lsm_real distance_mm;   /* signed target distance */
-    lsm_real dir;           /* +1 or -1 (the sign of distance_mm; +1 for a still axis) */
+    lsm_real distance_mm; /* signed target distance */
+    lsm_real dir;         /* +1 or -1 (the sign of distance_mm; +1 for a still axis) */
     lsm_real v0_mm_s, v1_mm_s;
-    lsm_real vc_mm_s;       /* corrected cruise feed */
-    lsm_real jp_acc_mm_s3;  /* corrected peak jerk of the first ramp (signed, travel frame) */
-    lsm_real jp_dec_mm_s3;  /* corrected peak jerk of the second ramp (signed, travel frame) */
+    lsm_real vc_mm_s;      /* corrected cruise feed */
+    lsm_real jp_acc_mm_s3; /* corrected peak jerk of the first ramp (signed, travel frame) */
+    lsm_real jp_dec_mm_s3; /* corrected peak jerk of the second ramp (signed, travel frame) */
 } lsm_move_axis;
 
 typedef struct lsm_move {
     lsm_real cycle_s;
     uint8_t n_axes;
-    uint8_t slowest_axis;           /* whose intervals the others share */
-    lsm_scurve_intervals acc, dec;  /* shared whole-cycle intervals of the two ramps */
+    uint8_t slowest_axis;          /* whose intervals the others share */
+    lsm_scurve_intervals acc, dec; /* shared whole-cycle intervals of the two ramps */
     uint32_t cruise_cycles;
     lsm_move_axis axis[LSM_MAX_AXES];
 } lsm_move;

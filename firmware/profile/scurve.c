@@ -168,14 +168,15 @@ static void paper_intervals(const lsm_scurve_limits *lim, lsm_real dt, lsm_real 
     const lsm_real dt1 = n1 * dt;
     const lsm_real jp = 2 / PI_R * dt1 * DJ; /* eq 32 */
     info->jp_initial_mm_s3 = jp;
-    info->dt2a_s = A / jp - PI_R * jp / (2 * DJ);                                              /* eq 27 */
+    info->dt2a_s = A / jp - PI_R * jp / (2 * DJ);                                                         /* eq 27 */
     info->dt2f_s = lsm_sqrt(jp * jp * PI_R * PI_R / (16 * DJ * DJ) + dv / jp) - 3 * jp * PI_R / (4 * DJ); /* eq 30 */
-    lsm_real n2 = lsm_min2(lsm_floor(info->dt2a_s / dt + PAPER_FLOOR_GUARD), lsm_floor(info->dt2f_s / dt + (lsm_real)0.5));
+    lsm_real n2 =
+        lsm_min2(lsm_floor(info->dt2a_s / dt + PAPER_FLOOR_GUARD), lsm_floor(info->dt2f_s / dt + (lsm_real)0.5));
     n2 = lsm_max2(n2, 0); /* eq 36 */
     const lsm_real dt2 = n2 * dt;
     const lsm_real ap = jp * (dt1 + dt2); /* eq 23 */
     info->ap_mm_s2 = ap;
-    info->dt4f_s = dv / ap - PI_R * jp / (2 * DJ) - ap / jp; /* eq 31, last term -A_P/J_P */
+    info->dt4f_s = dv / ap - PI_R * jp / (2 * DJ) - ap / jp;                       /* eq 31, last term -A_P/J_P */
     const lsm_real n4 = lsm_max2(lsm_floor(info->dt4f_s / dt + (lsm_real)0.5), 0); /* eq 37 */
     iv->n1_cycles = to_count(n1);
     iv->n2_cycles = to_count(n2);
@@ -233,9 +234,9 @@ lsm_status lsm_scurve_plan(lsm_scurve *out, const lsm_scurve_limits *lim, lsm_re
     lsm_scurve_info *inf = info ? info : &tmp;
     const lsm_real dv = lsm_fabs(v1_mm_s - v0_mm_s);
     const lsm_real A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4;
-    inf->dt1j_s = PI_R * J / (2 * DJ);                 /* eq 25 */
-    inf->dt1a_s = lsm_sqrt(PI_R * A / (2 * DJ));       /* eq 26 */
-    inf->dt1f_s = lsm_cbrt(PI_R * dv / (4 * DJ));      /* eq 29 */
+    inf->dt1j_s = PI_R * J / (2 * DJ);            /* eq 25 */
+    inf->dt1a_s = lsm_sqrt(PI_R * A / (2 * DJ));  /* eq 26 */
+    inf->dt1f_s = lsm_cbrt(PI_R * dv / (4 * DJ)); /* eq 29 */
 
     out->cycle_s = cycle_s;
     out->v0_mm_s = v0_mm_s;

@@ -75,13 +75,13 @@ typedef struct lsm_scurve {
 
 /* The intermediate quantities of §4 (Table 1 rows), for reports and verification. */
 typedef struct lsm_scurve_info {
-    lsm_real dt1j_s, dt1a_s, dt1f_s;   /* eqs 25, 26, 29 (unquantised) */
-    lsm_real dt2a_s, dt2f_s;           /* eqs 27, 30, from the quantised dt1 */
-    lsm_real dt4f_s;                   /* eq 31 (sign corrected), from quantised dt1, dt2 */
-    lsm_real jp_initial_mm_s3;         /* eq 32 with the quantised dt1 (before correction) */
-    lsm_real ap_mm_s2;                 /* eq 23 with the initial J_P (Table 1's A_P row) */
-    lsm_real ap_final_mm_s2;           /* |corrected J_P| (dt1 + dt2): the peak acceleration actually reached */
-    lsm_real snap_final_mm_s4;         /* |corrected J_P| pi / (2 dt1): the peak snap actually reached */
+    lsm_real dt1j_s, dt1a_s, dt1f_s; /* eqs 25, 26, 29 (unquantised) */
+    lsm_real dt2a_s, dt2f_s;         /* eqs 27, 30, from the quantised dt1 */
+    lsm_real dt4f_s;                 /* eq 31 (sign corrected), from quantised dt1, dt2 */
+    lsm_real jp_initial_mm_s3;       /* eq 32 with the quantised dt1 (before correction) */
+    lsm_real ap_mm_s2;               /* eq 23 with the initial J_P (Table 1's A_P row) */
+    lsm_real ap_final_mm_s2;         /* |corrected J_P| (dt1 + dt2): the peak acceleration actually reached */
+    lsm_real snap_final_mm_s4;       /* |corrected J_P| pi / (2 dt1): the peak snap actually reached */
 } lsm_scurve_info;
 
 /* Kinematic state at one instant. */
@@ -146,16 +146,12 @@ void lsm_scurve_eval_cycle(const lsm_scurve *sc, uint32_t k, lsm_real frac, lsm_
 /* ---- Building blocks shared with moves and the per-cycle evaluators ---- */
 
 /* Shape of one interval's jerk: sin² rise (T1, T5), constant (T2, T4, T6, cruise), cos² fall (T3, T7). */
-typedef enum lsm_phase_shape {
-    LSM_PHASE_RISE = 0,
-    LSM_PHASE_CONST = 1,
-    LSM_PHASE_FALL = 2
-} lsm_phase_shape;
+typedef enum lsm_phase_shape { LSM_PHASE_RISE = 0, LSM_PHASE_CONST = 1, LSM_PHASE_FALL = 2 } lsm_phase_shape;
 
 /* One interval: its length, jerk shape and signed jerk amplitude (0 for T4 and cruise). */
 typedef struct lsm_phase {
     uint32_t n_cycles;
-    uint8_t shape;      /* lsm_phase_shape */
+    uint8_t shape; /* lsm_phase_shape */
     lsm_real jerk_mm_s3;
 } lsm_phase;
 

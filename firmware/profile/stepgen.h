@@ -22,21 +22,21 @@
 #include "move.h"
 
 typedef struct lsm_stepgen {
-    const lsm_move *mv;           /* the plan (caller-owned, must outlive the generator) */
-    uint32_t k;                   /* cycles emitted so far */
-    uint32_t total;               /* total cycles of the move */
-    uint8_t phase;                /* current phase 0..LSM_MOVE_PHASES-1 */
-    uint32_t m;                   /* cycles into the current phase */
-    lsm_real c, s;                /* cos(phi), sin(phi) of the current sin² phase */
-    lsm_real cd_acc, sd_acc;      /* rotation step of the first ramp (cos, sin of pi / n1) */
-    lsm_real cd_dec, sd_dec;      /* rotation step of the second ramp */
-    lsm_real k8, k16;             /* 1/(8 w²), 1/(16 w³) of the current sin² phase (s², s³) */
+    const lsm_move *mv;      /* the plan (caller-owned, must outlive the generator) */
+    uint32_t k;              /* cycles emitted so far */
+    uint32_t total;          /* total cycles of the move */
+    uint8_t phase;           /* current phase 0..LSM_MOVE_PHASES-1 */
+    uint32_t m;              /* cycles into the current phase */
+    lsm_real c, s;           /* cos(phi), sin(phi) of the current sin² phase */
+    lsm_real cd_acc, sd_acc; /* rotation step of the first ramp (cos, sin of pi / n1) */
+    lsm_real cd_dec, sd_dec; /* rotation step of the second ramp */
+    lsm_real k8, k16;        /* 1/(8 w²), 1/(16 w³) of the current sin² phase (s², s³) */
     lsm_real origin_mm[LSM_MAX_AXES];
-    lsm_kin start[LSM_MAX_AXES];  /* state at the current phase start (travel frame) */
+    lsm_kin start[LSM_MAX_AXES];                  /* state at the current phase start (travel frame) */
     lsm_real st_s[LSM_MOVE_PHASES][LSM_MAX_AXES]; /* every phase's start: s, v, a (from init, travel frame) */
     lsm_real st_v[LSM_MOVE_PHASES][LSM_MAX_AXES];
     lsm_real st_a[LSM_MOVE_PHASES][LSM_MAX_AXES];
-    lsm_real jerk[LSM_MAX_AXES];  /* jerk amplitude of the current phase (travel frame) */
+    lsm_real jerk[LSM_MAX_AXES]; /* jerk amplitude of the current phase (travel frame) */
 } lsm_stepgen;
 
 /* Starts at the move's first cycle. start_mm may be NULL (all zero). Errors: LSM_E_NULL. */

@@ -76,10 +76,10 @@ lsm_status node_app_init(node_app *app, const node_app_config *cfg, uint32_t now
         return st;
     if (cfg->path_exec != NODE_APP_PATH_EXACT && cfg->path_exec != NODE_APP_PATH_PLANNER)
         return LSM_E_ARG;
-    uint32_t la_cap = cfg->lookahead_blocks != 0u ? cfg->lookahead_blocks
+    uint32_t la_cap = cfg->lookahead_blocks != 0u         ? cfg->lookahead_blocks
                       : app->machine.lookahead_blocks > 0 ? (uint32_t)app->machine.lookahead_blocks
-                                                           : 64u;
-    la_cap = la_cap < LSM_PLANNER_MIN_BLOCKS ? LSM_PLANNER_MIN_BLOCKS
+                                                          : 64u;
+    la_cap = la_cap < LSM_PLANNER_MIN_BLOCKS   ? LSM_PLANNER_MIN_BLOCKS
              : la_cap > NODE_APP_LOOKAHEAD_MAX ? NODE_APP_LOOKAHEAD_MAX
                                                : la_cap;
     mc.n_axes = cfg->n_axes;

@@ -30,19 +30,19 @@
 #define NODE_APP_PATH_SLOTS_MAX 1024
 #define NODE_APP_PATH_PLANNER LSM_MOTION_PATH_PLANNER
 #define NODE_APP_PATH_EXACT LSM_MOTION_PATH_EXACT
-#define NODE_APP_LOOKAHEAD_MAX 256  /* largest planner block storage (look-ahead depth, corner transitions included) */
+#define NODE_APP_LOOKAHEAD_MAX 256 /* largest planner block storage (look-ahead depth, corner transitions included) */
 
 typedef struct node_app_config {
-    uint8_t node_id;             /* 1..127 */
-    uint8_t n_axes;              /* 1..machine axes */
-    uint32_t cycle_us;           /* control cycle */
-    uint16_t heartbeat_ms;       /* 0x1017 default */
-    uint8_t master_id;           /* 0x1016 sub 1 default: monitored node, 0 = none */
+    uint8_t node_id;       /* 1..127 */
+    uint8_t n_axes;        /* 1..machine axes */
+    uint32_t cycle_us;     /* control cycle */
+    uint16_t heartbeat_ms; /* 0x1017 default */
+    uint8_t master_id;     /* 0x1016 sub 1 default: monitored node, 0 = none */
     uint16_t master_timeout_ms;
-    uint16_t path_slots;         /* path buffer capacity, 1..NODE_APP_PATH_SLOTS_MAX */
-    uint16_t lookahead_blocks;   /* planner storage (0: the machine's lookahead_blocks) */
-    uint8_t path_exec;           /* NODE_APP_PATH_PLANNER (look-ahead, pathfeed.h) or NODE_APP_PATH_EXACT (pathexact.h) */
-    const sim_machine *machine;  /* limits and drives; copied */
+    uint16_t path_slots;       /* path buffer capacity, 1..NODE_APP_PATH_SLOTS_MAX */
+    uint16_t lookahead_blocks; /* planner storage (0: the machine's lookahead_blocks) */
+    uint8_t path_exec;         /* NODE_APP_PATH_PLANNER (look-ahead, pathfeed.h) or NODE_APP_PATH_EXACT (pathexact.h) */
+    const sim_machine *machine; /* limits and drives; copied */
 } node_app_config;
 
 typedef struct node_app {
@@ -52,15 +52,15 @@ typedef struct node_app {
     node_app_config cfg;
     sim_machine machine;
     double cycle_s;
-    lsm_motion mo;                                      /* the CiA 402 motion layer */
-    lsm_pblock la_blocks[NODE_APP_LOOKAHEAD_MAX];       /* its planner storage */
+    lsm_motion mo;                                          /* the CiA 402 motion layer */
+    lsm_pblock la_blocks[NODE_APP_LOOKAHEAD_MAX];           /* its planner storage */
     lsm_co_path_block la_saved[NODE_APP_LOOKAHEAD_MAX + 1]; /* its block copies (pathfeed.h) */
     sim_drive drv[LSM_MAX_AXES];
     double actual[LSM_MAX_AXES], actual_vel[LSM_MAX_AXES]; /* drive feedback (mm, mm/s) */
     uint64_t cycles;
     bool estop;
     bool out_enable, out_inpos;
-    uint32_t rx_errors;         /* frames lsm_canopen_rx refused (malformed, wrong NMT state) */
+    uint32_t rx_errors; /* frames lsm_canopen_rx refused (malformed, wrong NMT state) */
 } node_app;
 
 /* The built-in machine (used without --machine): n linear axes named X Y Z U V W, limits 250 mm/s,

@@ -110,26 +110,56 @@ static int parse_int(const char *s, int lo, int hi, const char *what)
 }
 
 enum {
-    O_HB = 1000, O_MASTER, O_MASTER_TMO, O_SLOTS, O_CHIP, O_ESTOP, O_ESTOP_LOW, O_ESTOP_BIAS, O_ENABLE, O_INPOS,
-    O_OUT_LOW, O_NO_GPIO, O_TRACE, O_RUN_FOR, O_RT, O_STATS, O_VERSION, O_PATH_EXEC, O_LOOKAHEAD
+    O_HB = 1000,
+    O_MASTER,
+    O_MASTER_TMO,
+    O_SLOTS,
+    O_CHIP,
+    O_ESTOP,
+    O_ESTOP_LOW,
+    O_ESTOP_BIAS,
+    O_ENABLE,
+    O_INPOS,
+    O_OUT_LOW,
+    O_NO_GPIO,
+    O_TRACE,
+    O_RUN_FOR,
+    O_RT,
+    O_STATS,
+    O_VERSION,
+    O_PATH_EXEC,
+    O_LOOKAHEAD
 };
 
 static void parse(int argc, char **argv, options *o)
 {
-    static const struct option longs[] = {
-        {"iface", required_argument, 0, 'i'}, {"node-id", required_argument, 0, 'n'},
-        {"axes", required_argument, 0, 'a'}, {"cycle-us", required_argument, 0, 'c'},
-        {"machine", required_argument, 0, 'm'}, {"heartbeat-ms", required_argument, 0, O_HB},
-        {"master-id", required_argument, 0, O_MASTER}, {"master-timeout-ms", required_argument, 0, O_MASTER_TMO},
-        {"path-slots", required_argument, 0, O_SLOTS}, {"gpio-chip", required_argument, 0, O_CHIP},
-        {"path-exec", required_argument, 0, O_PATH_EXEC}, {"lookahead", required_argument, 0, O_LOOKAHEAD},
-        {"estop-line", required_argument, 0, O_ESTOP}, {"estop-active-low", no_argument, 0, O_ESTOP_LOW},
-        {"estop-bias", required_argument, 0, O_ESTOP_BIAS}, {"enable-line", required_argument, 0, O_ENABLE},
-        {"inpos-line", required_argument, 0, O_INPOS}, {"outputs-active-low", no_argument, 0, O_OUT_LOW},
-        {"no-gpio", no_argument, 0, O_NO_GPIO}, {"trace", required_argument, 0, O_TRACE},
-        {"run-for", required_argument, 0, O_RUN_FOR}, {"rt", required_argument, 0, O_RT},
-        {"stats", no_argument, 0, O_STATS}, {"verbose", no_argument, 0, 'v'}, {"help", no_argument, 0, 'h'},
-        {"version", no_argument, 0, O_VERSION}, {0, 0, 0, 0}};
+    static const struct option longs[] = {{"iface", required_argument, 0, 'i'},
+                                          {"node-id", required_argument, 0, 'n'},
+                                          {"axes", required_argument, 0, 'a'},
+                                          {"cycle-us", required_argument, 0, 'c'},
+                                          {"machine", required_argument, 0, 'm'},
+                                          {"heartbeat-ms", required_argument, 0, O_HB},
+                                          {"master-id", required_argument, 0, O_MASTER},
+                                          {"master-timeout-ms", required_argument, 0, O_MASTER_TMO},
+                                          {"path-slots", required_argument, 0, O_SLOTS},
+                                          {"gpio-chip", required_argument, 0, O_CHIP},
+                                          {"path-exec", required_argument, 0, O_PATH_EXEC},
+                                          {"lookahead", required_argument, 0, O_LOOKAHEAD},
+                                          {"estop-line", required_argument, 0, O_ESTOP},
+                                          {"estop-active-low", no_argument, 0, O_ESTOP_LOW},
+                                          {"estop-bias", required_argument, 0, O_ESTOP_BIAS},
+                                          {"enable-line", required_argument, 0, O_ENABLE},
+                                          {"inpos-line", required_argument, 0, O_INPOS},
+                                          {"outputs-active-low", no_argument, 0, O_OUT_LOW},
+                                          {"no-gpio", no_argument, 0, O_NO_GPIO},
+                                          {"trace", required_argument, 0, O_TRACE},
+                                          {"run-for", required_argument, 0, O_RUN_FOR},
+                                          {"rt", required_argument, 0, O_RT},
+                                          {"stats", no_argument, 0, O_STATS},
+                                          {"verbose", no_argument, 0, 'v'},
+                                          {"help", no_argument, 0, 'h'},
+                                          {"version", no_argument, 0, O_VERSION},
+                                          {0, 0, 0, 0}};
     memset(o, 0, sizeof *o);
     o->iface = "vcan0";
     o->node_id = 1;
@@ -216,10 +246,10 @@ static void parse(int argc, char **argv, options *o)
 
 /* ---- trace ---- */
 
-static const char *k_node_cols[] = {"t_s", "t_real_s", "cycle", "nmt", "estop", "enable", "inpos",
-                                    "path_state", "path_seq", "path_free", "feed_mm_s"};
-static const char *k_axis_cols[] = {"set_mm", "act_mm", "v_mm_s", "a_mm_s2", "j_mm_s3", "err_mm",
-                                    "sw", "state", "mode", "tgt_mm"};
+static const char *k_node_cols[] = {"t_s",   "t_real_s",   "cycle",    "nmt",       "estop",    "enable",
+                                    "inpos", "path_state", "path_seq", "path_free", "feed_mm_s"};
+static const char *k_axis_cols[] = {"set_mm", "act_mm", "v_mm_s", "a_mm_s2", "j_mm_s3",
+                                    "err_mm", "sw",     "state",  "mode",    "tgt_mm"};
 #define N_NODE_COLS (sizeof k_node_cols / sizeof k_node_cols[0])
 #define N_AXIS_COLS (sizeof k_axis_cols / sizeof k_axis_cols[0])
 
@@ -443,9 +473,8 @@ int main(int argc, char **argv)
         lsm_port_linux_close();
         return 1;
     }
-    printf("lissom-node: ready iface=%s node=%d axes=%d cycle_us=%d machine=%s path=%s gpio=%s estop=%s\n",
-           opt.iface, opt.node_id, axes, cycle_us, app.machine.name,
-           opt.path_exec == NODE_APP_PATH_EXACT ? "exact" : "planner",
+    printf("lissom-node: ready iface=%s node=%d axes=%d cycle_us=%d machine=%s path=%s gpio=%s estop=%s\n", opt.iface,
+           opt.node_id, axes, cycle_us, app.machine.name, opt.path_exec == NODE_APP_PATH_EXACT ? "exact" : "planner",
            lsm_port_linux_has_gpio() ? opt.port.gpio_chip : "none", d.has_estop ? "yes" : "no");
     fflush(stdout);
     while (!d.done)

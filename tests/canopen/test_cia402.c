@@ -37,19 +37,27 @@ static void fb(int32_t demand, int32_t actual, bool standstill)
 /* BaseNode402's statusword masks */
 static const char *state_name(uint16_t sw)
 {
-    if ((sw & 0x4F) == 0x00) return "NOT READY TO SWITCH ON";
-    if ((sw & 0x4F) == 0x40) return "SWITCH ON DISABLED";
-    if ((sw & 0x6F) == 0x21) return "READY TO SWITCH ON";
-    if ((sw & 0x6F) == 0x23) return "SWITCHED ON";
-    if ((sw & 0x6F) == 0x27) return "OPERATION ENABLED";
-    if ((sw & 0x4F) == 0x08) return "FAULT";
-    if ((sw & 0x4F) == 0x0F) return "FAULT REACTION ACTIVE";
-    if ((sw & 0x6F) == 0x07) return "QUICK STOP ACTIVE";
+    if ((sw & 0x4F) == 0x00)
+        return "NOT READY TO SWITCH ON";
+    if ((sw & 0x4F) == 0x40)
+        return "SWITCH ON DISABLED";
+    if ((sw & 0x6F) == 0x21)
+        return "READY TO SWITCH ON";
+    if ((sw & 0x6F) == 0x23)
+        return "SWITCHED ON";
+    if ((sw & 0x6F) == 0x27)
+        return "OPERATION ENABLED";
+    if ((sw & 0x4F) == 0x08)
+        return "FAULT";
+    if ((sw & 0x4F) == 0x0F)
+        return "FAULT REACTION ACTIVE";
+    if ((sw & 0x6F) == 0x07)
+        return "QUICK STOP ACTIVE";
     return "UNKNOWN";
 }
 
-static const char *k_names[] = {"NOT READY TO SWITCH ON", "SWITCH ON DISABLED", "READY TO SWITCH ON", "SWITCHED ON",
-                                "OPERATION ENABLED", "QUICK STOP ACTIVE", "FAULT REACTION ACTIVE", "FAULT"};
+static const char *k_names[] = {"NOT READY TO SWITCH ON", "SWITCH ON DISABLED", "READY TO SWITCH ON",    "SWITCHED ON",
+                                "OPERATION ENABLED",      "QUICK STOP ACTIVE",  "FAULT REACTION ACTIVE", "FAULT"};
 
 static void expect_state(lsm_cia402_state s)
 {
@@ -71,9 +79,7 @@ static void reach(lsm_cia402_state s)
     case LSM_CIA402_READY_TO_SWITCH_ON: cw(0x06); break;
     case LSM_CIA402_SWITCHED_ON: cw(0x06), cw(0x07); break;
     case LSM_CIA402_OPERATION_ENABLED: cw(0x06), cw(0x07), cw(0x0F); break;
-    case LSM_CIA402_QUICK_STOP_ACTIVE:
-        cw(0x06), cw(0x07), cw(0x0F), cw(0x02);
-        break;
+    case LSM_CIA402_QUICK_STOP_ACTIVE: cw(0x06), cw(0x07), cw(0x0F), cw(0x02); break;
     case LSM_CIA402_FAULT:
         cw(0x00);
         lsm_cia402_fault(&ax, 0x1234, true);
@@ -92,9 +98,15 @@ static void reach(lsm_cia402_state s)
 static void test_transition_table(void **state)
 {
     (void)state;
-    enum { SOD = LSM_CIA402_SWITCH_ON_DISABLED, RTSO = LSM_CIA402_READY_TO_SWITCH_ON, SO = LSM_CIA402_SWITCHED_ON,
-           OE = LSM_CIA402_OPERATION_ENABLED, QSA = LSM_CIA402_QUICK_STOP_ACTIVE,
-           FRA = LSM_CIA402_FAULT_REACTION_ACTIVE, F = LSM_CIA402_FAULT };
+    enum {
+        SOD = LSM_CIA402_SWITCH_ON_DISABLED,
+        RTSO = LSM_CIA402_READY_TO_SWITCH_ON,
+        SO = LSM_CIA402_SWITCHED_ON,
+        OE = LSM_CIA402_OPERATION_ENABLED,
+        QSA = LSM_CIA402_QUICK_STOP_ACTIVE,
+        FRA = LSM_CIA402_FAULT_REACTION_ACTIVE,
+        F = LSM_CIA402_FAULT
+    };
     static const uint16_t cmds[] = {0x06, 0x07, 0x0F, 0x00, 0x02, 0x80, 0x0E, 0x0B};
     static const uint8_t from[] = {SOD, RTSO, SO, OE, QSA, F, FRA};
     /* rows: from; columns: shutdown, switch on / disable op, enable op, disable voltage, quick stop,
@@ -194,8 +206,10 @@ static void test_quick_stop_options(void **state)
         int16_t opt;
         uint8_t kind;
         bool stays;
-    } o[] = {{1, LSM_CIA402_STOP_SLOW, false}, {2, LSM_CIA402_STOP_QUICK, false},
-             {5, LSM_CIA402_STOP_SLOW, true}, {6, LSM_CIA402_STOP_QUICK, true}};
+    } o[] = {{1, LSM_CIA402_STOP_SLOW, false},
+             {2, LSM_CIA402_STOP_QUICK, false},
+             {5, LSM_CIA402_STOP_SLOW, true},
+             {6, LSM_CIA402_STOP_QUICK, true}};
     for (size_t i = 0; i < 4; i++) {
         reach(LSM_CIA402_OPERATION_ENABLED);
         assert_int_equal(lsm_cia402_od_write(&ax, 0x605A, 0, o[i].opt, now), 0);
@@ -308,7 +322,7 @@ static void test_pp_single_setpoint(void **state)
     assert_int_equal(sp.profile_type, 1);
     assert_false(sp.blend);
     assert_int_equal(lsm_cia402_pp_fetch(&ax, &sp), LSM_CIA402_SP_NONE); /* fetched once */
-    cw(0x2F); /* master clears bit 4 */
+    cw(0x2F);                                                            /* master clears bit 4 */
     assert_false(ax.statusword & LSM_CIA402_SW_ACK);
     fb(500, 498, false);
     assert_false(ax.statusword & LSM_CIA402_SW_TARGET_REACHED);

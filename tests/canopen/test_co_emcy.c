@@ -91,9 +91,9 @@ static void test_suppressed_and_overflow(void **state)
     (void)state;
     lsm_can_frame f[32];
     assert_int_equal(lsm_co_emcy_raise(&em, 0x9000, LSM_CO_ERREG_GENERIC, 0xFF, 0, false, &q), LSM_OK);
-    assert_int_equal(pop_all(f, 32), 0);           /* not allowed to send now */
-    assert_int_equal(em.error_register, 0x01);     /* but latched */
-    assert_int_equal(em.n_history, 1);             /* and recorded */
+    assert_int_equal(pop_all(f, 32), 0);       /* not allowed to send now */
+    assert_int_equal(em.error_register, 0x01); /* but latched */
+    assert_int_equal(em.n_history, 1);         /* and recorded */
     assert_int_equal(em.suppressed, 1);
     for (uint16_t c = 0; c < LSM_CO_EMCY_ACTIVE + 3; c++)
         assert_int_equal(lsm_co_emcy_raise(&em, (uint16_t)(0x5000 + c), LSM_CO_ERREG_VOLTAGE, 0, 0, true, &q), LSM_OK);

@@ -174,7 +174,7 @@ static void test_reset_communication(void **state)
     (void)state;
     assert_int_equal(sdo_write_u(&tn, 0x1017, 0, 77, 2), 0);
     assert_int_equal(sdo_write_u(&tn, 0x1800, 1, 0xC0000185u, 4), 0); /* TPDO1 off */
-    assert_int_equal(sdo_write_u(&tn, 0x6081, 0, 4242, 4), 0);       /* an application object */
+    assert_int_equal(sdo_write_u(&tn, 0x6081, 0, 4242, 4), 0);        /* an application object */
     tn_nmt(&tn, 0x01, NODE_ID);
     tn_nmt(&tn, 0x82, NODE_ID);
     drain(&tn);

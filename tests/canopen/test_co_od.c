@@ -276,7 +276,8 @@ static void test_init_checks(void **state)
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U16, LSM_CO_OD_R, 0, 0, 4, 0}, "size != type size");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U16, 0, 0, 0, 2, 0}, "no access");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U32, LSM_CO_OD_R, 0, 0, 4, sizeof(obj) - 2}, "outside base");
-    expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U32, LSM_CO_OD_RW | LSM_CO_OD_CONST, 0, 0, 4, 1}, "writable const");
+    expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U32, LSM_CO_OD_RW | LSM_CO_OD_CONST, 0, 0, 4, 1},
+               "writable const");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U64, LSM_CO_OD_R | LSM_CO_OD_CONST, 0, 0, 8, 1}, "64-bit const");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U8, LSM_CO_OD_R | LSM_CO_OD_RPDO, 0, 0, 1, 0}, "RPDO without W");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U8, LSM_CO_OD_W | LSM_CO_OD_TPDO, 0, 0, 1, 0}, "TPDO without R");
@@ -285,7 +286,8 @@ static void test_init_checks(void **state)
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U64, LSM_CO_OD_RW, 0, RG_SMALL, 8, 0}, "U64 range min < 0");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_U8, LSM_CO_OD_RW, 2, 0, 1, 0}, "empty group");
     expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_VSTRING, LSM_CO_OD_R, 0, 0, 8, 0}, "string without STRPTR");
-    expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_DOMAIN, LSM_CO_OD_RW | LSM_CO_OD_HOOK, 0, 0, 8, 0}, "readable domain");
+    expect_bad((lsm_co_od_entry){0x2100, 0, LSM_CO_T_DOMAIN, LSM_CO_OD_RW | LSM_CO_OD_HOOK, 0, 0, 8, 0},
+               "readable domain");
     expect_bad((lsm_co_od_entry){0x2000, 0, LSM_CO_T_U8, LSM_CO_OD_R, 0, 0, 1, 0}, "duplicate");
     expect_bad((lsm_co_od_entry){0x2FF0, 0, LSM_CO_T_I32, LSM_CO_OD_RW, 1, 0, 4, O(inst[0])},
                "instance 1 of a group entry collides with 0x3000:00");

@@ -421,8 +421,7 @@ static void test_lossy_channel(void **state)
                 lsm_co_path_block blk;
                 if (lsm_co_path_pop(&tn.node.path, &blk) == LSM_OK) {
                     if (blk.seq != popped + 1u || blk.end[0] != (int32_t)(blk.seq * 7u))
-                        fail_msg("run %lu: popped seq %u (end %d), expected %u", run, blk.seq, blk.end[0],
-                                 popped + 1u);
+                        fail_msg("run %lu: popped seq %u (end %d), expected %u", run, blk.seq, blk.end[0], popped + 1u);
                     popped++;
                 }
             }

@@ -43,16 +43,16 @@ static void test_default_mapping(void **state)
         uint8_t sub;
         uint32_t v;
     } want[] = {
-        {0x1400, 1, 0x205}, {0x1400, 2, 255}, {0x1600, 0, 1}, {0x1600, 1, 0x60400010},
-        {0x1401, 1, 0x305}, {0x1401, 2, 1}, {0x1601, 0, 2}, {0x1601, 1, 0x607A0020}, {0x1601, 2, 0x687A0020},
-        {0x1402, 1, 0x405}, {0x1602, 0, 1}, {0x1602, 1, 0x707A0020},
-        {0x1403, 1, 0x505}, {0x1603, 0, 2}, {0x1603, 1, 0x68400010}, {0x1603, 2, 0x70400010},
-        {0x1800, 1, 0x40000185}, {0x1800, 2, 255}, {0x1800, 5, 50}, {0x1A00, 0, 2}, {0x1A00, 1, 0x60410010}, {0x1A00, 2, 0x60610008},
-        {0x1801, 1, 0x40000285}, {0x1801, 2, 1}, {0x1A01, 0, 3}, {0x1A01, 1, 0x50020008}, {0x1A01, 2, 0x50030010},
-        {0x1A01, 3, 0x50040020},
-        {0x1802, 1, 0x40000385}, {0x1A02, 0, 2}, {0x1A02, 1, 0x60640020}, {0x1A02, 2, 0x68640020},
-        {0x1803, 1, 0x40000485}, {0x1A03, 0, 2}, {0x1A03, 1, 0x70640020}, {0x1A03, 2, 0x50050020},
-        {0x1005, 0, 0x80}, {0x1400, 0, 2}, {0x1800, 0, 5},
+        {0x1400, 1, 0x205},      {0x1400, 2, 255},        {0x1600, 0, 1},          {0x1600, 1, 0x60400010},
+        {0x1401, 1, 0x305},      {0x1401, 2, 1},          {0x1601, 0, 2},          {0x1601, 1, 0x607A0020},
+        {0x1601, 2, 0x687A0020}, {0x1402, 1, 0x405},      {0x1602, 0, 1},          {0x1602, 1, 0x707A0020},
+        {0x1403, 1, 0x505},      {0x1603, 0, 2},          {0x1603, 1, 0x68400010}, {0x1603, 2, 0x70400010},
+        {0x1800, 1, 0x40000185}, {0x1800, 2, 255},        {0x1800, 5, 50},         {0x1A00, 0, 2},
+        {0x1A00, 1, 0x60410010}, {0x1A00, 2, 0x60610008}, {0x1801, 1, 0x40000285}, {0x1801, 2, 1},
+        {0x1A01, 0, 3},          {0x1A01, 1, 0x50020008}, {0x1A01, 2, 0x50030010}, {0x1A01, 3, 0x50040020},
+        {0x1802, 1, 0x40000385}, {0x1A02, 0, 2},          {0x1A02, 1, 0x60640020}, {0x1A02, 2, 0x68640020},
+        {0x1803, 1, 0x40000485}, {0x1A03, 0, 2},          {0x1A03, 1, 0x70640020}, {0x1A03, 2, 0x50050020},
+        {0x1005, 0, 0x80},       {0x1400, 0, 2},          {0x1800, 0, 5},
     };
     for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
         uint64_t v = 0;
@@ -277,7 +277,7 @@ static void test_mapping_procedure(void **state)
     assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 3, 1), LSM_CO_ABORT_PDO_LENGTH);
     assert_int_equal(sdo_write_u(&tn, 0x1A02, 3, 0x10010008, 4), 0); /* 32 + 32 + 8 = 72 bits: one byte too many */
     assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 3, 1), LSM_CO_ABORT_PDO_LENGTH);
-    assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 2, 1), 0);          /* 64 bits exactly: fine */
+    assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 2, 1), 0); /* 64 bits exactly: fine */
     assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 0, 1), 0);
     assert_int_equal(sdo_write_u(&tn, 0x1A02, 0, 9, 1), LSM_CO_ABORT_VALUE_HIGH);
     /* sub 0 = 4 with entry 4 empty */
@@ -293,9 +293,9 @@ static void test_mapping_procedure(void **state)
     assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x20000385u, 4), LSM_CO_ABORT_VALUE); /* 29-bit */
     assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x00000701u, 4), LSM_CO_ABORT_VALUE); /* restricted */
     assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x00000000u, 4), LSM_CO_ABORT_VALUE);
-    assert_int_equal(sdo_write_u(&tn, 0x1802, 2, 245, 1), LSM_CO_ABORT_VALUE);          /* reserved type */
-    assert_int_equal(sdo_write_u(&tn, 0x1802, 2, 253, 1), LSM_CO_ABORT_VALUE);          /* RTR only */
-    assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x00000390u, 4), 0);                   /* new id, valid */
+    assert_int_equal(sdo_write_u(&tn, 0x1802, 2, 245, 1), LSM_CO_ABORT_VALUE);         /* reserved type */
+    assert_int_equal(sdo_write_u(&tn, 0x1802, 2, 253, 1), LSM_CO_ABORT_VALUE);         /* RTR only */
+    assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x00000390u, 4), 0);                  /* new id, valid */
     assert_int_equal(sdo_write_u(&tn, 0x1802, 1, 0x00000391u, 4), LSM_CO_ABORT_VALUE); /* change while valid */
     uint64_t v;
     assert_int_equal(sdo_read_u(&tn, 0x1802, 1, &v), 0);

@@ -271,9 +271,9 @@ static void test_abort_codes(void **state)
     r = sdo_request(&tn, e);
     assert_int_equal(abort_code(&r), LSM_CO_ABORT_LENGTH_LOW); /* 5 < 8 at initiate */
     /* values */
-    assert_int_equal(sdo_write_u(&tn, 0x6060, 0, 5, 1), LSM_CO_ABORT_VALUE);        /* mode 5 unsupported */
-    assert_int_equal(sdo_write_u(&tn, 0x6086, 0, 2, 2), LSM_CO_ABORT_VALUE);        /* profile type 2 */
-    assert_int_equal(sdo_write_u(&tn, 0x605A, 0, 0, 2), LSM_CO_ABORT_VALUE);        /* coast: refused */
+    assert_int_equal(sdo_write_u(&tn, 0x6060, 0, 5, 1), LSM_CO_ABORT_VALUE); /* mode 5 unsupported */
+    assert_int_equal(sdo_write_u(&tn, 0x6086, 0, 2, 2), LSM_CO_ABORT_VALUE); /* profile type 2 */
+    assert_int_equal(sdo_write_u(&tn, 0x605A, 0, 0, 2), LSM_CO_ABORT_VALUE); /* coast: refused */
     assert_int_equal(sdo_write_u(&tn, 0x6007, 0, 4, 2), LSM_CO_ABORT_VALUE_HIGH);
     assert_int_equal(sdo_write_u(&tn, 0x6007, 0, (uint16_t)-1, 2), LSM_CO_ABORT_VALUE_LOW);
     assert_int_equal(sdo_write_u(&tn, 0x6081, 0, 0, 4), LSM_CO_ABORT_VALUE_LOW);    /* zero velocity */

@@ -114,16 +114,16 @@ static void test_malformed(void **state)
 {
     (void)state;
     static const char *const bad[] = {
-        "t12\r",              /* too short */
-        "t1239\r",            /* dlc 9 */
-        "t12381122\r",        /* dlc 8, 2 bytes */
-        "t123211223\r",       /* one digit too many */
-        "t12G0\r",            /* bad hex in the id */
-        "t8000\r",            /* id > 0x7FF */
-        "T200000000\r",       /* 29-bit id out of range */
-        "t1231X1\r",          /* bad hex in the data */
-        "r1239\r",            /* remote dlc 9 */
-        "r12311\r",           /* remote with data */
+        "t12\r",                                       /* too short */
+        "t1239\r",                                     /* dlc 9 */
+        "t12381122\r",                                 /* dlc 8, 2 bytes */
+        "t123211223\r",                                /* one digit too many */
+        "t12G0\r",                                     /* bad hex in the id */
+        "t8000\r",                                     /* id > 0x7FF */
+        "T200000000\r",                                /* 29-bit id out of range */
+        "t1231X1\r",                                   /* bad hex in the data */
+        "r1239\r",                                     /* remote dlc 9 */
+        "r12311\r",                                    /* remote with data */
         "t1238000000000000000000000000000000000000\r", /* overlong */
     };
     lsm_slcan s;

@@ -23,7 +23,7 @@ typedef struct test_node {
     lsm_canopen node;
     lsm_can_frame tx[TXCAP];
     lsm_co_path_block blocks[PATHCAP];
-    lsm_can_frame out[TXCAP];   /* frames collected by drain() */
+    lsm_can_frame out[TXCAP]; /* frames collected by drain() */
     size_t n_out;
     uint32_t now_us;
 } test_node;

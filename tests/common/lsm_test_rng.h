@@ -54,8 +54,8 @@ static inline unsigned long long test_arg_u(int argc, char **argv, int k, unsign
 static inline int test_seed_finish(const char *prog, unsigned long long seed, unsigned long long count, int rc)
 {
     if (rc != 0)
-        fprintf(stderr, "%s: %d failed with seed %llu, count %llu; replay: %s %llu %llu\n", prog, rc, seed, count,
-                prog, seed, count);
+        fprintf(stderr, "%s: %d failed with seed %llu, count %llu; replay: %s %llu %llu\n", prog, rc, seed, count, prog,
+                seed, count);
     return rc;
 }
 

@@ -24,7 +24,7 @@ typedef struct fake_link {
     size_t in_len, in_pos;
     char out[65536];
     size_t out_len;
-    size_t room;          /* characters write may take (SIZE_MAX: unlimited) */
+    size_t room; /* characters write may take (SIZE_MAX: unlimited) */
 } fake_link;
 
 static fake_link g_link;
@@ -66,8 +66,8 @@ static void host_send(const char *s)
 
 static void ticks(unsigned n)
 {
-    lsm_canopen_tick_stats st = {.ticks = 77, .overruns = 0, .worst_instr = 12345, .bg_load_permille = 42,
-                                 .late_wakes = 3, .clock_ms = 9};
+    lsm_canopen_tick_stats st =
+        {.ticks = 77, .overruns = 0, .worst_instr = 12345, .bg_load_permille = 42, .late_wakes = 3, .clock_ms = 9};
     for (unsigned i = 0; i < n; i++) {
         g_now += 1000u;
         ctl_app_tick(&g_app, g_now, false, &st);
@@ -132,20 +132,36 @@ static void test_channel_and_sdo(void **state)
     ticks(1);
     assert_string_equal(take_out(), "\r\r\r");
     /* SDO upload 0x1000 sub 0 -> 0x00020192 */
-    host_send("t6058" "4000100000000000" "\r");
+    host_send("t6058"
+              "4000100000000000"
+              "\r");
     ticks(1);
-    assert_string_equal(take_out(), "z\rt5858" "4300100092010200" "\r");
+    assert_string_equal(take_out(), "z\rt5858"
+                                    "4300100092010200"
+                                    "\r");
     /* 0x5F00 sub 3: the worst tick the board passed in */
-    host_send("t6058" "40005F0300000000" "\r");
+    host_send("t6058"
+              "40005F0300000000"
+              "\r");
     ticks(1);
-    assert_string_equal(take_out(), "z\rt5858" "43005F0339300000" "\r");
-    host_send("t6058" "40005F0600000000" "\r");
+    assert_string_equal(take_out(), "z\rt5858"
+                                    "43005F0339300000"
+                                    "\r");
+    host_send("t6058"
+              "40005F0600000000"
+              "\r");
     ticks(1);
-    assert_string_equal(take_out(), "z\rt5858" "43005F0609000000" "\r");
+    assert_string_equal(take_out(), "z\rt5858"
+                                    "43005F0609000000"
+                                    "\r");
     /* writing it is refused (read-only: 0x06010002) */
-    host_send("t6058" "23005F0301000000" "\r");
+    host_send("t6058"
+              "23005F0301000000"
+              "\r");
     ticks(1);
-    assert_string_equal(take_out(), "z\rt5858" "80005F0302000106" "\r");
+    assert_string_equal(take_out(), "z\rt5858"
+                                    "80005F0302000106"
+                                    "\r");
     /* NMT reset node: a boot-up frame */
     host_send("t00028105\r");
     ticks(3);
@@ -166,7 +182,9 @@ static void test_bounded_parsing_and_link_room(void **state)
     take_out();
     /* 40 SDO requests at once: more characters than one tick parses */
     for (int i = 0; i < 40; i++)
-        host_send("t6058" "4000100000000000" "\r");
+        host_send("t6058"
+                  "4000100000000000"
+                  "\r");
     const size_t total = g_link.in_len, start = g_link.in_pos;
     ticks(1);
     assert_int_equal(g_link.in_pos - start, CTL_RX_CHARS_PER_TICK);
@@ -176,18 +194,25 @@ static void test_bounded_parsing_and_link_room(void **state)
     /* every answer came, once each, in order */
     const char *out = take_out();
     unsigned answers = 0;
-    for (const char *p = out; (p = strstr(p, "t5858" "4300100092010200" "\r")) != NULL; p++)
+    for (const char *p = out; (p = strstr(p, "t5858"
+                                             "4300100092010200"
+                                             "\r")) != NULL;
+         p++)
         answers++;
     assert_int_equal(answers, 40);
     /* a link with no room: the answer waits, then goes out whole */
     g_link.room = 5;
-    host_send("t6058" "4000100000000000" "\r");
+    host_send("t6058"
+              "4000100000000000"
+              "\r");
     ticks(1);
     assert_string_equal(take_out(), "z\r"); /* the reply fitted, the 24-character frame did not */
     assert_true(g_app.have_pending);
     g_link.room = SIZE_MAX;
     ticks(1);
-    assert_string_equal(take_out(), "t5858" "4300100092010200" "\r");
+    assert_string_equal(take_out(), "t5858"
+                                    "4300100092010200"
+                                    "\r");
     assert_int_equal(g_app.n.replies_lost, 0);
 }
 
@@ -200,19 +225,31 @@ static void test_pp_setpoint(void **state)
     host_send("t00020105\r"); /* NMT start */
     ticks(2);
     /* mode PP, shutdown, switch on, enable */
-    host_send("t6058" "2F60600001000000" "\r");
+    host_send("t6058"
+              "2F60600001000000"
+              "\r");
     ticks(2);
-    host_send("t6058" "2B40600006000000" "\r");
+    host_send("t6058"
+              "2B40600006000000"
+              "\r");
     ticks(2);
-    host_send("t6058" "2B40600007000000" "\r");
+    host_send("t6058"
+              "2B40600007000000"
+              "\r");
     ticks(2);
-    host_send("t6058" "2B4060000F000000" "\r");
+    host_send("t6058"
+              "2B4060000F000000"
+              "\r");
     ticks(3);
     assert_int_equal(ax->state, LSM_CIA402_OPERATION_ENABLED);
     take_out();
-    host_send("t6058" "237A6000E8030000" "\r"); /* target 1000 */
+    host_send("t6058"
+              "237A6000E8030000"
+              "\r"); /* target 1000 */
     ticks(2);
-    host_send("t6058" "2B4060001F000000" "\r"); /* new set-point */
+    host_send("t6058"
+              "2B4060001F000000"
+              "\r"); /* new set-point */
 #if defined(CTL_MOTION_CIA402)
     ticks(2000); /* 1 mm with the default profile objects: well within 2 s */
     assert_int_equal(ax->pos_demand, 1000);
@@ -222,7 +259,8 @@ static void test_pp_setpoint(void **state)
 #else
     ticks(5);
     const char *out = take_out();
-    assert_non_null(strstr(out, "t0858" "0061")); /* EMCY 0x6100 */
+    assert_non_null(strstr(out, "t0858"
+                                "0061")); /* EMCY 0x6100 */
     assert_int_equal(g_motion.refused[0], 1);
     assert_int_equal(ax->error_code, 0x6100);
 #endif

@@ -104,9 +104,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             const double blk = fz_block_bound_s(m, len, mv.rapid ? INFINITY : fmax((double)mv.feed_mm_s, 0.1), rad);
             if ((est + blk) / min_ovr > FZ_MAX_EST_S || (est + blk) / min_ovr / m->cycle_s > FZ_MAX_EST_CYCLES)
                 continue; /* too slow to be worth running: not appended */
-            const lsm_status st = op < 3 ? lsm_planner_append_line(&r.pl, to, &mv)
-                                         : lsm_planner_append_arc(&r.pl, to, centre, k_planes[pi],
-                                                                  (o[9] & 0x80) ? -1 : 1, (uint32_t)((o[9] >> 4) % 3), &mv);
+            const lsm_status st = op < 3
+                                      ? lsm_planner_append_line(&r.pl, to, &mv)
+                                      : lsm_planner_append_arc(&r.pl, to, centre, k_planes[pi], (o[9] & 0x80) ? -1 : 1,
+                                                               (uint32_t)((o[9] >> 4) % 3), &mv);
             if (st == LSM_E_FULL) {
                 fz_step(&r); /* run a cycle and drop the block (the next op goes on) */
                 continue;

@@ -34,11 +34,11 @@
 #include "planner.h"
 
 #define FZ_AXES 3
-#define FZ_CAPACITY 24u              /* look-ahead storage: small, so that the ring wraps and runs low */
-#define FZ_MAX_EST_S 30.0            /* inputs whose time bound is longer are skipped (not interesting, slow) */
-#define FZ_MAX_EST_CYCLES 150000.0   /* ... and so are those with more cycles than this */
-#define FZ_REL_TOL 1e-6              /* relative slack on every limit (the planner's documented margin) */
-#define FZ_CRAWL_FACTOR 4.0          /* a run longer than 4 x the time bound + FZ_CRAWL_SLACK_S is a crawl */
+#define FZ_CAPACITY 24u            /* look-ahead storage: small, so that the ring wraps and runs low */
+#define FZ_MAX_EST_S 30.0          /* inputs whose time bound is longer are skipped (not interesting, slow) */
+#define FZ_MAX_EST_CYCLES 150000.0 /* ... and so are those with more cycles than this */
+#define FZ_REL_TOL 1e-6            /* relative slack on every limit (the planner's documented margin) */
+#define FZ_CRAWL_FACTOR 4.0        /* a run longer than 4 x the time bound + FZ_CRAWL_SLACK_S is a crawl */
 #define FZ_CRAWL_SLACK_S 0.5
 
 typedef struct fz_machine {
@@ -94,8 +94,8 @@ static void fz_known(int kind, const char *fmt, ...)
         }
     }
     if (g_fz_known_count[kind]++ < 3)
-        fprintf(stderr, "FUZZ KNOWN %s (%s build): %s\n", k_fz_known_names[kind], LSM_REAL_IS_FLOAT ? "float" : "double",
-                msg);
+        fprintf(stderr, "FUZZ KNOWN %s (%s build): %s\n", k_fz_known_names[kind],
+                LSM_REAL_IS_FLOAT ? "float" : "double", msg);
 }
 
 static void fz_config(const fz_machine *m, lsm_planner_config *cfg)
@@ -138,7 +138,7 @@ typedef struct fz_run {
     double q[4][FZ_AXES]; /* the last four setpoints, q[0] newest */
     double span;          /* largest |coordinate| seen (float noise) */
     long cycles;
-    long idle_cycles;     /* cycles at rest by request (HELD) or for want of blocks (IDLE): not counted as crawl */
+    long idle_cycles; /* cycles at rest by request (HELD) or for want of blocks (IDLE): not counted as crawl */
     lsm_interp_state state;
     int limit_reported;
 } fz_run;
@@ -195,7 +195,8 @@ static lsm_interp_state fz_step(fz_run *r)
     memmove(&r->q[1], &r->q[0], 3 * sizeof r->q[0]);
     for (int a = 0; a < FZ_AXES; a++) {
         if (!isfinite((double)pos[a]))
-            fz_fatal("machine %s cycle %ld: axis %d setpoint %g is not finite", r->m->name, r->cycles, a, (double)pos[a]);
+            fz_fatal("machine %s cycle %ld: axis %d setpoint %g is not finite", r->m->name, r->cycles, a,
+                     (double)pos[a]);
         r->q[0][a] = (double)pos[a];
         r->span = fmax(r->span, fabs((double)pos[a]));
     }

@@ -85,7 +85,10 @@ static void run_prog_opt(run_t *r, const char *text, size_t len, size_t chunk, c
     r->modal = res.modal;
 }
 
-static void run_prog(run_t *r, const char *text) { run_prog_opt(r, text, strlen(text), 0, NULL); }
+static void run_prog(run_t *r, const char *text)
+{
+    run_prog_opt(r, text, strlen(text), 0, NULL);
+}
 
 /* Parse one line on a fresh parser prepared by `setup` (a program of earlier lines). */
 static lsm_status one_line(const char *setup, const char *line, lsm_gcode_result *res)
@@ -122,9 +125,9 @@ static void expect_error(const char *setup, const char *line, lsm_status code, u
     lsm_status st = one_line(setup, line, &res);
     const uint32_t want_line = line_after(setup);
     if (st != code || res.err.column != column || res.err.line != want_line) {
-        print_error("line \"%s\": got %d (%s) at %u:%u, expected %d (%s) at %u:%u\n", line, (int)st,
-                    lsm_status_str(st), (unsigned)res.err.line, (unsigned)res.err.column, (int)code,
-                    lsm_status_str(code), (unsigned)want_line, (unsigned)column);
+        print_error("line \"%s\": got %d (%s) at %u:%u, expected %d (%s) at %u:%u\n", line, (int)st, lsm_status_str(st),
+                    (unsigned)res.err.line, (unsigned)res.err.column, (int)code, lsm_status_str(code),
+                    (unsigned)want_line, (unsigned)column);
     }
     assert_int_equal(st, code);
     assert_int_equal(res.status, code);
@@ -542,8 +545,8 @@ static void test_streaming_chunks(void **state)
     len += (size_t)snprintf(prog + len, sizeof prog - len, "%%\r\nG21 G90 G64 P0.01 (setup)\r\nG0 X0 Y0\r\nF1500\r\n");
     for (int i = 0; i < 200; i++) {
         double a = 2 * PI * i / 200.0;
-        len += (size_t)snprintf(prog + len, sizeof prog - len, "N%d G1 X%.4f Y%.4f ; chord %d\n", i + 10,
-                                20 * cos(a), 20 * sin(a), i);
+        len += (size_t)snprintf(prog + len, sizeof prog - len, "N%d G1 X%.4f Y%.4f ; chord %d\n", i + 10, 20 * cos(a),
+                                20 * sin(a), i);
     }
     len += (size_t)snprintf(prog + len, sizeof prog - len, "G1 X20 Y0\nG2 X20 Y0 I-20 J0\nG3 X0 Y0 R10\nM30\n");
     run_prog_opt(&g_run, prog, len, 0, NULL);
@@ -618,7 +621,7 @@ static void test_err_range_and_long_lines(void **state)
     expect_error(NULL, "G0 X2000000", LSM_E_GC_NUMBER_RANGE, 4);
     expect_error(NULL, "G0 Y-1000000.5", LSM_E_GC_NUMBER_RANGE, 4);
     expect_error(NULL, "F99999999", LSM_E_GC_NUMBER_RANGE, 1);
-    expect_error(NULL, "G20 G0 X100000", LSM_E_GC_NUMBER_RANGE, 8); /* 2.54e6 mm after conversion */
+    expect_error(NULL, "G20 G0 X100000", LSM_E_GC_NUMBER_RANGE, 8);        /* 2.54e6 mm after conversion */
     expect_error("G91 G0 X900000\n", "X900000", LSM_E_GC_NUMBER_RANGE, 1); /* accumulated */
     lsm_gcode_result res;
     expect_ok(NULL, "G0 X1000000", &res); /* the limit itself is representable */
@@ -814,27 +817,32 @@ static void test_err_issue_cases_in_one_program(void **state)
     static char prog[2048];
     size_t n = 0;
     n += (size_t)snprintf(prog + n, sizeof prog - n,
-                          "G21 G90 G17 F600\n"          /* 1 ok */
-                          "G1 X1 Q5\n"                  /* 2 unknown word Q, column 7 */
-                          "G1 X\n"                      /* 3 missing argument, column 4 */
-                          "G2 X30 Y0 R10\n"             /* 4 chord 30 > diameter 20, column 11 (R) */
-                          "G2 X10 Y0 I0 J0\n"           /* 5 centre on the start, column 11 (I) */
-                          "G2 X10 Y0 I5.1\n"            /* 6 radii 5.1 / 4.9 differ, column 1 (G2) */
-                          "G1 X12345678901234567890\n"  /* 7 number too large, column 4 */
-                          "G1 X2");                     /* 8 overlong: column LSM_GCODE_MAX_LINE + 1 */
+                          "G21 G90 G17 F600\n"         /* 1 ok */
+                          "G1 X1 Q5\n"                 /* 2 unknown word Q, column 7 */
+                          "G1 X\n"                     /* 3 missing argument, column 4 */
+                          "G2 X30 Y0 R10\n"            /* 4 chord 30 > diameter 20, column 11 (R) */
+                          "G2 X10 Y0 I0 J0\n"          /* 5 centre on the start, column 11 (I) */
+                          "G2 X10 Y0 I5.1\n"           /* 6 radii 5.1 / 4.9 differ, column 1 (G2) */
+                          "G1 X12345678901234567890\n" /* 7 number too large, column 4 */
+                          "G1 X2");                    /* 8 overlong: column LSM_GCODE_MAX_LINE + 1 */
     memset(prog + n, ' ', LSM_GCODE_MAX_LINE + 40);
     n += LSM_GCODE_MAX_LINE + 40;
-    static const char junk[] = "Y1\n\x89PNG\x1a\x00\x7f\xff\n"     /* 9 binary junk, column 1 */
-                               "G1 X3\n";                         /* 10 ok */
+    static const char junk[] = "Y1\n\x89PNG\x1a\x00\x7f\xff\n" /* 9 binary junk, column 1 */
+                               "G1 X3\n";                      /* 10 ok */
     memcpy(prog + n, junk, sizeof junk - 1);
     n += sizeof junk - 1;
     static const struct {
         lsm_status code;
         uint32_t line, column;
     } want[] = {
-        {LSM_E_GC_UNKNOWN_WORD, 2, 7},  {LSM_E_GC_MISSING_ARG, 3, 4},    {LSM_E_GC_ARC_RADIUS, 4, 11},
-        {LSM_E_GC_ARC_CENTRE, 5, 11},   {LSM_E_GC_ARC_MISMATCH, 6, 1},   {LSM_E_GC_NUMBER_RANGE, 7, 4},
-        {LSM_E_GC_LINE_TOO_LONG, 8, LSM_GCODE_MAX_LINE + 1},             {LSM_E_GC_BINARY, 9, 1},
+        {LSM_E_GC_UNKNOWN_WORD, 2, 7},
+        {LSM_E_GC_MISSING_ARG, 3, 4},
+        {LSM_E_GC_ARC_RADIUS, 4, 11},
+        {LSM_E_GC_ARC_CENTRE, 5, 11},
+        {LSM_E_GC_ARC_MISMATCH, 6, 1},
+        {LSM_E_GC_NUMBER_RANGE, 7, 4},
+        {LSM_E_GC_LINE_TOO_LONG, 8, LSM_GCODE_MAX_LINE + 1},
+        {LSM_E_GC_BINARY, 9, 1},
     };
     static const size_t chunks[] = {0, 1, 3, 7, 64, 1000};
     for (size_t c = 0; c < sizeof chunks / sizeof chunks[0]; c++) {

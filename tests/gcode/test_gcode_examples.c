@@ -44,7 +44,8 @@ static void find_dir(void)
         snprintf(g_dir, sizeof g_dir, "%s", env);
         return;
     }
-    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR, "/host_sim/examples"); /* the repository (tests/CMakeLists.txt) */
+    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR,
+             "/host_sim/examples"); /* the repository (tests/CMakeLists.txt) */
 }
 
 static const prog_t *load(const char *name)

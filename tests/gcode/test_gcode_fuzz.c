@@ -33,8 +33,14 @@ static uint64_t g_seed = 1;
 static long g_count = 20000;
 
 static uint64_t rng_state;
-static int rint_(int n) { return (int)(test_urand(&rng_state) * n); }
-static double rdouble(double lo, double hi) { return lo + (hi - lo) * test_urand(&rng_state); }
+static int rint_(int n)
+{
+    return (int)(test_urand(&rng_state) * n);
+}
+static double rdouble(double lo, double hi)
+{
+    return lo + (hi - lo) * test_urand(&rng_state);
+}
 
 #define MAX_PROG 16384
 
@@ -53,7 +59,7 @@ static size_t append(char *buf, size_t n, const char *fmt, ...)
 static size_t gen_line(char *buf, size_t n)
 {
     static const char *const modal[] = {"G17", "G18", "G19", "G20", "G21", "G90", "G91", "G61", "G64", "G64 P0.02",
-                                        "G94", "G40", "G49", "G54", "G80", "G0", "G1", "G2", "G3"};
+                                        "G94", "G40", "G49", "G54", "G80", "G0",  "G1",  "G2",  "G3"};
     static const char *const axes = "XYZABC";
     if (rint_(10) == 0)
         n = append(buf, n, "N%d ", rint_(1000));
@@ -91,8 +97,8 @@ static size_t gen_line(char *buf, size_t n)
         double i = -r * cos(t0), j = -r * sin(t0);
         int form = rint_(3);
         if (form == 0) /* centre form, end on the circle */
-            n = append(buf, n, "G17 G91 G%d X%.4f Y%.4f I%.4f J%.4f F600\n", phi > 0 ? 3 : 2,
-                       i + r * cos(t0 + phi), j + r * sin(t0 + phi), i, j);
+            n = append(buf, n, "G17 G91 G%d X%.4f Y%.4f I%.4f J%.4f F600\n", phi > 0 ? 3 : 2, i + r * cos(t0 + phi),
+                       j + r * sin(t0 + phi), i, j);
         else if (form == 1) /* full circle, maybe helical with turns */
             n = append(buf, n, "G17 G91 G%d X0 Y0 Z%.3f I%.4f J%.4f P%d F600\n", 2 + rint_(2), rdouble(-2, 2), i, j,
                        1 + rint_(3));
@@ -109,14 +115,20 @@ static size_t gen_line(char *buf, size_t n)
 static void mutate(char *buf, size_t *len)
 {
     int kinds = rint_(4); /* number of mutations */
-    for (int m = 0; m < kinds && *len > 2 && *len < MAX_PROG - 600; m++) {
+    for (int m = 0; m<kinds && * len> 2 && *len < MAX_PROG - 600; m++) {
         size_t at = (size_t)rint_((int)*len);
         switch (rint_(6)) {
-        case 0: buf[at] = (char)rint_(256); break;                                          /* any byte */
-        case 1: memmove(buf + at, buf + at + 1, *len - at - 1); (*len)--; break;            /* delete */
-        case 2: memmove(buf + at + 1, buf + at, *len - at); (*len)++; break;                /* duplicate */
-        case 3: buf[at] = "XYZ.-+()#;%/ \tGMIJKRPFN0123456789"[rint_(34)]; break;          /* syntax chars */
-        case 4: { /* a very long digit string */
+        case 0: buf[at] = (char)rint_(256); break; /* any byte */
+        case 1:
+            memmove(buf + at, buf + at + 1, *len - at - 1);
+            (*len)--;
+            break; /* delete */
+        case 2:
+            memmove(buf + at + 1, buf + at, *len - at);
+            (*len)++;
+            break;                                                                /* duplicate */
+        case 3: buf[at] = "XYZ.-+()#;%/ \tGMIJKRPFN0123456789"[rint_(34)]; break; /* syntax chars */
+        case 4: {                                                                 /* a very long digit string */
             size_t k = (size_t)(10 + rint_(40));
             memmove(buf + at + k, buf + at, *len - at);
             for (size_t i = 0; i < k; i++)

@@ -23,7 +23,10 @@
 
 static lsm_gcode g_p;
 
-static void start(const lsm_gcode_options *opt) { assert_int_equal(lsm_gcode_init(&g_p, opt), LSM_OK); }
+static void start(const lsm_gcode_options *opt)
+{
+    assert_int_equal(lsm_gcode_init(&g_p, opt), LSM_OK);
+}
 
 static lsm_status line(const char *text, lsm_gcode_result *res)
 {
@@ -56,7 +59,10 @@ static void expect_text(const char *text, lsm_status code, uint32_t col, const c
     assert_int_equal(res.n_events, 0);
 }
 
-static void near(double got, double want) { assert_true(fabs(got - want) <= TOL_MM * (1 + fabs(want))); }
+static void near(double got, double want)
+{
+    assert_true(fabs(got - want) <= TOL_MM * (1 + fabs(want)));
+}
 
 static void test_events_in_linuxcnc_order(void **state)
 {
@@ -67,10 +73,11 @@ static void test_events_in_linuxcnc_order(void **state)
     /* every machine function on one line: S T M6 M3 M7 M8 G4 G43, the motion, then M0 */
     ok("N10 M8 G4 P0.5 M3 M6 T7 S12000 M7 G43 H7 G1 X5 F600 M0", &r);
     assert_int_equal(r.n_blocks, 1);
-    static const lsm_gcode_event_kind want[] = {
-        LSM_GCODE_EV_SPINDLE_SPEED, LSM_GCODE_EV_TOOL_SELECT,  LSM_GCODE_EV_TOOL_CHANGE,
-        LSM_GCODE_EV_SPINDLE_CW,    LSM_GCODE_EV_COOLANT_MIST, LSM_GCODE_EV_COOLANT_FLOOD,
-        LSM_GCODE_EV_DWELL,         LSM_GCODE_EV_TOOL_LENGTH,  LSM_GCODE_EV_PAUSE};
+    static const lsm_gcode_event_kind want[] = {LSM_GCODE_EV_SPINDLE_SPEED, LSM_GCODE_EV_TOOL_SELECT,
+                                                LSM_GCODE_EV_TOOL_CHANGE,   LSM_GCODE_EV_SPINDLE_CW,
+                                                LSM_GCODE_EV_COOLANT_MIST,  LSM_GCODE_EV_COOLANT_FLOOD,
+                                                LSM_GCODE_EV_DWELL,         LSM_GCODE_EV_TOOL_LENGTH,
+                                                LSM_GCODE_EV_PAUSE};
     assert_int_equal(r.n_events, 9);
     for (int k = 0; k < 9; k++) {
         assert_int_equal(r.events[k].kind, want[k]);
@@ -269,7 +276,7 @@ static void test_home_positions(void **state)
     near(r.blocks[0].end[1], 2);
     near(r.blocks[0].end[2], 30);
     assert_int_equal(r.modal.motion, LSM_GCODE_MOTION_RAPID); /* G28 keeps the motion mode */
-    ok("G90 G30 X5", &r);                                      /* intermediate X5, then X to G30's zero */
+    ok("G90 G30 X5", &r);                                     /* intermediate X5, then X to G30's zero */
     assert_int_equal(r.n_blocks, 2);
     near(r.blocks[0].end[0], 5);
     near(r.blocks[1].start[0], 5);
@@ -367,10 +374,14 @@ static void test_refused_line_changes_nothing(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_events_in_linuxcnc_order), cmocka_unit_test(test_end_stops_spindle_and_coolant),
-        cmocka_unit_test(test_pauses_and_dwell),         cmocka_unit_test(test_preamble_and_g80),
-        cmocka_unit_test(test_full_circle_without_end_words), cmocka_unit_test(test_work_offsets),
-        cmocka_unit_test(test_home_positions),           cmocka_unit_test(test_every_work_offset),
+        cmocka_unit_test(test_events_in_linuxcnc_order),
+        cmocka_unit_test(test_end_stops_spindle_and_coolant),
+        cmocka_unit_test(test_pauses_and_dwell),
+        cmocka_unit_test(test_preamble_and_g80),
+        cmocka_unit_test(test_full_circle_without_end_words),
+        cmocka_unit_test(test_work_offsets),
+        cmocka_unit_test(test_home_positions),
+        cmocka_unit_test(test_every_work_offset),
         cmocka_unit_test(test_error_texts),
         cmocka_unit_test(test_refused_line_changes_nothing),
     };

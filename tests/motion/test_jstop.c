@@ -41,8 +41,7 @@ static unsigned g_seed = 1, g_count = 3000;
 
 /* Runs a stop from (p, v, a, j) to its end; checks the limits cycle by cycle, the sampled jerk change also from
  * the starting jerk j to the first sample. Returns the number of cycles. */
-static unsigned run_stop_j(double p, double v, double a, double j, const lsm_jstop_limits *l, double dt,
-                           double *p_end)
+static unsigned run_stop_j(double p, double v, double a, double j, const lsm_jstop_limits *l, double dt, double *p_end)
 {
     lsm_jstop s;
     assert_int_equal(lsm_jstop_plan(&s, p, v, a, j, l), LSM_OK);
@@ -255,8 +254,10 @@ int main(int argc, char **argv)
     g_seed = (unsigned)test_arg_u(argc, argv, 1, g_seed);
     g_count = (unsigned)test_arg_u(argc, argv, 2, g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_constant_jerk_limit), cmocka_unit_test(test_decel_plateau),
-        cmocka_unit_test(test_at_rest), cmocka_unit_test(test_random_states),
+        cmocka_unit_test(test_constant_jerk_limit),
+        cmocka_unit_test(test_decel_plateau),
+        cmocka_unit_test(test_at_rest),
+        cmocka_unit_test(test_random_states),
         cmocka_unit_test(test_prof_move_and_stop),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));

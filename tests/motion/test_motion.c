@@ -204,7 +204,8 @@ static size_t count_sent(uint32_t id, uint16_t emcy_code)
     for (size_t i = 0; i < g_n_sent; i++) {
         if (g_sent[i].id != id)
             continue;
-        if (id == 0x80u + NID && g_sent[i].dlc == 8u && (uint16_t)(g_sent[i].data[0] | (g_sent[i].data[1] << 8)) != emcy_code)
+        if (id == 0x80u + NID && g_sent[i].dlc == 8u &&
+            (uint16_t)(g_sent[i].data[0] | (g_sent[i].data[1] << 8)) != emcy_code)
             continue;
         c++;
     }
@@ -492,9 +493,12 @@ static void test_csp(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_pp_and_estop), cmocka_unit_test(test_pp_setpoints),
+        cmocka_unit_test(test_pp_and_estop),
+        cmocka_unit_test(test_pp_setpoints),
         cmocka_unit_test(test_heartbeat_loss_and_busoff),
-        cmocka_unit_test(test_path_planner), cmocka_unit_test(test_path_exact), cmocka_unit_test(test_csp),
+        cmocka_unit_test(test_path_planner),
+        cmocka_unit_test(test_path_exact),
+        cmocka_unit_test(test_csp),
         cmocka_unit_test(test_path_dense_polyline),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

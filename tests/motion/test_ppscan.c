@@ -47,8 +47,8 @@
 #define MOVE_CRUISE_V_REL 0.0
 #endif
 
-#define CYCLE_S 0.001          /* the node's control cycle */
-#define MAX_CYCLES 200000u     /* guard: no scanned move or stop comes near it */
+#define CYCLE_S 0.001      /* the node's control cycle */
+#define MAX_CYCLES 200000u /* guard: no scanned move or stop comes near it */
 
 typedef struct profile {
     double v, a, j, snap;
@@ -67,8 +67,8 @@ typedef enum { REQ_HALT, REQ_BACK, REQ_BEYOND } req_kind;
 
 typedef struct worst {
     double v, a, j, snap, da, dv, ds; /* worst ratio to the allowed value (1 = at the limit) */
-    unsigned bad;                    /* request times with any violation */
-    unsigned defer_max;              /* most cycles a request waited for the end of a jerk pulse */
+    unsigned bad;                     /* request times with any violation */
+    unsigned defer_max;               /* most cycles a request waited for the end of a jerk pulse */
     unsigned runs;
 } worst;
 
@@ -90,9 +90,8 @@ static double ratio(double x, double lim, double noise_scale)
 static void note(checker *c, double *slot, double r)
 {
     if (r > 1 && !c->bad && c->w->bad < 3)
-        printf("  ratio %.9g (field %d) at cycle %u: s %.9g v %.9g a %.9g j %.9g\n", r,
-               (int)(slot - &c->w->v), c->n, (double)c->prev.s_mm, (double)c->prev.v_mm_s,
-               (double)c->prev.a_mm_s2, (double)c->prev.j_mm_s3);
+        printf("  ratio %.9g (field %d) at cycle %u: s %.9g v %.9g a %.9g j %.9g\n", r, (int)(slot - &c->w->v), c->n,
+               (double)c->prev.s_mm, (double)c->prev.v_mm_s, (double)c->prev.a_mm_s2, (double)c->prev.j_mm_s3);
     if (r > *slot)
         *slot = r;
     if (r > 1)
@@ -140,7 +139,13 @@ static unsigned move_cycles(const lsm_axprof_limits *lim, double dist)
 static void run_one(const lsm_axprof_limits *lim, double dist, unsigned at, req_kind rk)
 {
     const lsm_axprof_limits e = lsm_axprof_effective(lim, CYCLE_S);
-    checker c = {lim->v_max_mm_s, lim->a_max_mm_s2, lim->j_max_mm_s3, e.snap_max_mm_s4, {0, 0, 0, 0}, 0, false,
+    checker c = {lim->v_max_mm_s,
+                 lim->a_max_mm_s2,
+                 lim->j_max_mm_s3,
+                 e.snap_max_mm_s4,
+                 {0, 0, 0, 0},
+                 0,
+                 false,
                  &g_worst[lim->profile_type][rk]};
     lsm_axprof p;
     lsm_axprof_init(&p, CYCLE_S, 0);
@@ -164,13 +169,13 @@ static void run_one(const lsm_axprof_limits *lim, double dist, unsigned at, req_
     assert_true(n < MAX_CYCLES);
     if (waited > c.w->defer_max)
         c.w->defer_max = waited;
-    const bool end_ok = p.k.v_mm_s == 0 && p.k.a_mm_s2 == 0 && p.k.j_mm_s3 == 0 &&
-                        (rk == REQ_HALT || p.k.s_mm == (lsm_real)target);
+    const bool end_ok =
+        p.k.v_mm_s == 0 && p.k.a_mm_s2 == 0 && p.k.j_mm_s3 == 0 && (rk == REQ_HALT || p.k.s_mm == (lsm_real)target);
     if (!end_ok || c.bad) {
         c.w->bad++;
         if (c.w->bad <= 3)
-            printf("  violation: type %d V %g dist %g request %d at cycle %u (end s %.17g v %g)\n",
-                   lim->profile_type, lim->v_max_mm_s, dist, (int)rk, at, (double)p.k.s_mm, (double)p.k.v_mm_s);
+            printf("  violation: type %d V %g dist %g request %d at cycle %u (end s %.17g v %g)\n", lim->profile_type,
+                   lim->v_max_mm_s, dist, (int)rk, at, (double)p.k.s_mm, (double)p.k.v_mm_s);
     }
     c.w->runs++;
 }

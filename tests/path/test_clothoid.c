@@ -35,9 +35,18 @@ static long g_count = 3000;
 static uint64_t g_rng;
 
 /* the shared generator (lsm_test_rng.h) on this test's state */
-static double urand(void) { return test_urand(&g_rng); }
-static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
-static double logu(double a, double b) { return exp(uni(log(a), log(b))); }
+static double urand(void)
+{
+    return test_urand(&g_rng);
+}
+static double uni(double a, double b)
+{
+    return test_uni(&g_rng, a, b);
+}
+static double logu(double a, double b)
+{
+    return exp(uni(log(a), log(b)));
+}
 
 /* ---- reference quadrature ---- */
 
@@ -186,10 +195,10 @@ static void test_integral_cases(void **state)
     /* the three regimes: circle closed form, piecewise series, Fresnel form (c > 0 and c < 0,
      * vertex inside or outside), and s < 0 */
     const double k[][4] = {
-        {0, 0, 0, 5},          {0.3, 0.2, 0, 7},       {1, -3, 0, 40},         {0, 0, PI, 1},
-        {0, 0, PI, 4.4},       {0.5, 0.1, 0.02, 10},   {2, -0.5, 0.3, -4},     {0, 0, 1, 100},
-        {0, 0, -1, 100},       {0.3, 17, 0.237, 16.4}, {0.3, -5, 0.5, 30},     {1, 4, -0.5, 30},
-        {0, 1, 1e-9, 100},     {0, 0, 1e-3, 300},      {-2, 0.01, 2e-5, 1500}, {0, 0.5, -0.01, 100},
+        {0, 0, 0, 5},      {0.3, 0.2, 0, 7},       {1, -3, 0, 40},         {0, 0, PI, 1},
+        {0, 0, PI, 4.4},   {0.5, 0.1, 0.02, 10},   {2, -0.5, 0.3, -4},     {0, 0, 1, 100},
+        {0, 0, -1, 100},   {0.3, 17, 0.237, 16.4}, {0.3, -5, 0.5, 30},     {1, 4, -0.5, 30},
+        {0, 1, 1e-9, 100}, {0, 0, 1e-3, 300},      {-2, 0.01, 2e-5, 1500}, {0, 0.5, -0.01, 100},
     };
     for (size_t i = 0; i < sizeof k / sizeof k[0]; i++)
         check_integral(k[i][0], k[i][1], k[i][2], k[i][3], (long)i);
@@ -342,10 +351,10 @@ static double local_fast_err(double phi_max, double b_max, int n, double *err_ge
             lsm_real fer, fei, fmr, fmi, ger, gei, gmr, gmi;
             lsm_clothoid_local_fast(a, b, &fer, &fei, &fmr, &fmi);
             lsm_clothoid_local(a, b, &ger, &gei, &gmr, &gmi);
-            const double e = (double)fmaxl(fmaxl(fabsl(fer - er), fabsl(fei - ei)),
-                                           fmaxl(fabsl(fmr - mr), fabsl(fmi - mi)));
-            const double g = (double)fmaxl(fmaxl(fabsl(ger - er), fabsl(gei - ei)),
-                                           fmaxl(fabsl(gmr - mr), fabsl(gmi - mi)));
+            const double e =
+                (double)fmaxl(fmaxl(fabsl(fer - er), fabsl(fei - ei)), fmaxl(fabsl(fmr - mr), fabsl(fmi - mi)));
+            const double g =
+                (double)fmaxl(fmaxl(fabsl(ger - er), fabsl(gei - ei)), fmaxl(fabsl(gmr - mr), fabsl(gmi - mi)));
             if (e > worst)
                 worst = e;
             if (g > worst_g)
@@ -494,8 +503,7 @@ static void test_stepper_start(void **state)
     double worst_pos = 0, worst_tan = 0;
     for (size_t i = 0; i < sizeof segs / sizeof segs[0]; i++) {
         lsm_clothoid cl;
-        assert_int_equal(lsm_clothoid_init(&cl, segs[i][0], segs[i][1], segs[i][2], segs[i][3], segs[i][4],
-                                           segs[i][5]),
+        assert_int_equal(lsm_clothoid_init(&cl, segs[i][0], segs[i][1], segs[i][2], segs[i][3], segs[i][4], segs[i][5]),
                          LSM_OK);
         for (size_t j = 0; j < sizeof frac / sizeof frac[0]; j++) {
             const lsm_real s0 = (lsm_real)(frac[j] * cl.len_mm);
@@ -531,7 +539,8 @@ static void test_stepper_start(void **state)
 
 /* ---- fit ---- */
 
-static void check_fit(const lsm_clothoid_state *s0, double A, double B, double C, const lsm_clothoid_fit_result *r, long n)
+static void check_fit(const lsm_clothoid_state *s0, double A, double B, double C, const lsm_clothoid_fit_result *r,
+                      long n)
 {
     /* recompute the end independently */
     double X, Y;
@@ -546,8 +555,7 @@ static void check_fit(const lsm_clothoid_state *s0, double A, double B, double C
     if (!(dist <= tol * scale && fabs(cross) <= tol * 10 && r->s_mm > 0 && r->iterations <= LSM_CLOTHOID_FIT_MAX_ITER &&
           r->bracket_steps <= LSM_CLOTHOID_FIT_BRACKET_MAX_ITER)) {
         print_error("fit %ld (seed %lu): dist %.3g (scale %.3g), cross %.3g, s %.6g, c %.6g, it %d, bracket %d\n", n,
-                    g_seed, dist, scale, cross, (double)r->s_mm, (double)r->c_per_mm2, r->iterations,
-                    r->bracket_steps);
+                    g_seed, dist, scale, cross, (double)r->s_mm, (double)r->c_per_mm2, r->iterations, r->bracket_steps);
         fail();
     }
     assert_true(fabs(r->end.x_mm - x) <= tol * scale && fabs(r->end.y_mm - y) <= tol * scale);
@@ -691,12 +699,17 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fresnel_reference), cmocka_unit_test(test_fresnel_derivative),
-        cmocka_unit_test(test_integral_cases),    cmocka_unit_test(test_integral_random),
-        cmocka_unit_test(test_eval),              cmocka_unit_test(test_stepper),
-        cmocka_unit_test(test_local_fast),        cmocka_unit_test(test_stepper_large_steps),
+        cmocka_unit_test(test_fresnel_reference),
+        cmocka_unit_test(test_fresnel_derivative),
+        cmocka_unit_test(test_integral_cases),
+        cmocka_unit_test(test_integral_random),
+        cmocka_unit_test(test_eval),
+        cmocka_unit_test(test_stepper),
+        cmocka_unit_test(test_local_fast),
+        cmocka_unit_test(test_stepper_large_steps),
         cmocka_unit_test(test_stepper_start),
-        cmocka_unit_test(test_fit_lines),         cmocka_unit_test(test_fit_random),
+        cmocka_unit_test(test_fit_lines),
+        cmocka_unit_test(test_fit_random),
         cmocka_unit_test(test_fit_newton_stall),
         cmocka_unit_test(test_fit_bad_input),
     };

@@ -44,18 +44,33 @@ static long g_count = 600;
 static uint64_t g_rng;
 
 /* the shared generator (lsm_test_rng.h) on this test's state */
-static double urand(void) { return test_urand(&g_rng); }
-static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
-static double logu(double a, double b) { return exp(uni(log(a), log(b))); }
+static double urand(void)
+{
+    return test_urand(&g_rng);
+}
+static double uni(double a, double b)
+{
+    return test_uni(&g_rng, a, b);
+}
+static double logu(double a, double b)
+{
+    return exp(uni(log(a), log(b)));
+}
 
-static double dot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static double dot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 static void cross(const double a[3], const double b[3], double o[3])
 {
     o[0] = a[1] * b[2] - a[2] * b[1];
     o[1] = a[2] * b[0] - a[0] * b[2];
     o[2] = a[0] * b[1] - a[1] * b[0];
 }
-static double norm(const double a[3]) { return sqrt(dot(a, a)); }
+static double norm(const double a[3])
+{
+    return sqrt(dot(a, a));
+}
 static double dist3(const double a[3], const double b[3])
 {
     const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
@@ -487,7 +502,8 @@ static void check_corner(const corner_case *k, const lsm_corner_result *r, long 
     const double km = fmax(fmax(fabs(A->kappa0_per_mm), fabs(A->kappa0_per_mm + A->c_per_mm2 * L)),
                            fabs(B->kappa0_per_mm + B->c_per_mm2 * L));
     ok = ok && fabs(km - r->kappa_max_per_mm) <= 1e-6 * km &&
-         fabs(fmax(fabs(A->c_per_mm2), fabs(B->c_per_mm2)) - r->sharpness_max_per_mm2) <= 1e-6 * r->sharpness_max_per_mm2;
+         fabs(fmax(fabs(A->c_per_mm2), fabs(B->c_per_mm2)) - r->sharpness_max_per_mm2) <=
+             1e-6 * r->sharpness_max_per_mm2;
     if (!ok) {
         print_error("corner %ld (seed %lu) kind %d delta %.6g deg eps %.6g: gap %.3g (tol %.3g) tan %.3g curv %.3g "
                     "dev %.9g (vertex %.9g path %.9g) reported %.9g limited %d trims %.6g/%.6g of %.6g/%.6g "
@@ -502,23 +518,27 @@ static void check_corner(const corner_case *k, const lsm_corner_result *r, long 
             if (g->kind == LSM_GEOM_ARC)
                 test_arc_centre(g, gc);
             if (g->kind == LSM_GEOM_ARC)
-                print_error("  b%d arc c %.17g %.17g %.17g e1 %.17g %.17g %.17g e2 %.17g %.17g %.17g r %.17g phi0 %.17g "
-                            "sweep %.17g\n", i + 1, gc[0], gc[1], gc[2], (double)g->u.arc.e1[0], (double)g->u.arc.e1[1],
+                print_error("  b%d arc c %.17g %.17g %.17g e1 %.17g %.17g %.17g e2 %.17g %.17g %.17g r %.17g phi0 "
+                            "%.17g "
+                            "sweep %.17g\n",
+                            i + 1, gc[0], gc[1], gc[2], (double)g->u.arc.e1[0], (double)g->u.arc.e1[1],
                             (double)g->u.arc.e1[2], (double)g->u.arc.e2[0], (double)g->u.arc.e2[1],
                             (double)g->u.arc.e2[2], (double)g->u.arc.radius_mm, (double)g->u.arc.phi0_rad,
                             (double)g->u.arc.sweep_rad);
             else
                 print_error("  b%d line p0 %.17g %.17g %.17g dir %.17g %.17g %.17g len %.17g\n", i + 1,
                             (double)g->u.line.p0[0], (double)g->u.line.p0[1], (double)g->u.line.p0[2],
-                            (double)g->u.line.dir[0], (double)g->u.line.dir[1], (double)g->u.line.dir[2], (double)g->len);
+                            (double)g->u.line.dir[0], (double)g->u.line.dir[1], (double)g->u.line.dir[2],
+                            (double)g->len);
         }
         for (int i = 0; i < 2; i++) {
             const lsm_geom_clothoid *q = &r->trans[i].u.clo;
-            print_error("  T%d o %.17g %.17g %.17g e1 %.17g %.17g %.17g e2 %.17g %.17g %.17g th0 %.17g k0 %.17g c %.17g "
-                        "L %.17g\n", i, (double)q->origin_mm[0], (double)q->origin_mm[1], (double)q->origin_mm[2],
-                        (double)q->e1[0], (double)q->e1[1], (double)q->e1[2], (double)q->e2[0], (double)q->e2[1],
-                        (double)q->e2[2], (double)q->theta0_rad, (double)q->kappa0_per_mm, (double)q->c_per_mm2,
-                        (double)r->trans[i].len);
+            print_error("  T%d o %.17g %.17g %.17g e1 %.17g %.17g %.17g e2 %.17g %.17g %.17g th0 %.17g k0 %.17g c "
+                        "%.17g "
+                        "L %.17g\n",
+                        i, (double)q->origin_mm[0], (double)q->origin_mm[1], (double)q->origin_mm[2], (double)q->e1[0],
+                        (double)q->e1[1], (double)q->e1[2], (double)q->e2[0], (double)q->e2[1], (double)q->e2[2],
+                        (double)q->theta0_rad, (double)q->kappa0_per_mm, (double)q->c_per_mm2, (double)r->trans[i].len);
         }
         fail();
     }
@@ -583,7 +603,8 @@ static void unit_xy(double delta, double *X, double *Y)
     *Y = (double)y;
 }
 
-static lsm_status smooth_lines(const double a[3], const double v[3], const double b[3], double eps, lsm_corner_result *r)
+static lsm_status smooth_lines(const double a[3], const double v[3], const double b[3], double eps,
+                               lsm_corner_result *r)
 {
     lsm_geom g1, g2;
     assert_int_equal(make_line(&g1, a, v), LSM_OK);
@@ -646,7 +667,8 @@ static void test_scaling(void **state)
              * L^2, so each ratio is sqrt(2) within a factor sqrt(1/0.9) either way */
             const double f = sqrt(1.0 / LSM_CORNER_ACCEPT) * 1.001;
             assert_true(prevL / L < sqrt(2.0) * f && prevL / L > sqrt(2.0) / f);
-            assert_true(r.sharpness_max_per_mm2 / prevc < sqrt(2.0) * f && r.sharpness_max_per_mm2 / prevc > sqrt(2.0) / f);
+            assert_true(r.sharpness_max_per_mm2 / prevc < sqrt(2.0) * f &&
+                        r.sharpness_max_per_mm2 / prevc > sqrt(2.0) / f);
         }
         if (fabs(r.kappa_max_per_mm * 20 - 1.0) >= (IS_F ? 1e-5 : 1e-12)) {
             print_error("eps %g: kappa_max * R = %.6g, L %.6g, trims %.6g %.6g dev %.6g limited %d\n", eps,
@@ -728,8 +750,8 @@ static void test_bad_input(void **state)
     assert_int_equal(lsm_corner_smooth(NULL, &g2, &p, &r), LSM_E_NULL);
     assert_int_equal(lsm_corner_smooth(&g1, &g2, NULL, &r), LSM_E_NULL);
     /* all distinct */
-    const lsm_status codes[] = {LSM_E_TOLERANCE, LSM_E_NAN,      LSM_E_INF,    LSM_E_COLLINEAR, LSM_E_REVERSAL,
-                                LSM_E_ZERO_LENGTH, LSM_E_GAP,    LSM_E_ROTARY, LSM_E_NONPLANAR, LSM_E_ARG,
+    const lsm_status codes[] = {LSM_E_TOLERANCE,         LSM_E_NAN, LSM_E_INF,    LSM_E_COLLINEAR, LSM_E_REVERSAL,
+                                LSM_E_ZERO_LENGTH,       LSM_E_GAP, LSM_E_ROTARY, LSM_E_NONPLANAR, LSM_E_ARG,
                                 LSM_E_CORNER_NO_SOLUTION};
     for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++)
         for (size_t j = i + 1; j < sizeof codes / sizeof codes[0]; j++)
@@ -799,7 +821,7 @@ static void test_geom(void **state)
     lsm_geom_eval(&g, g.len, p, t, NULL);
     assert_true(fabs(p[0] - 5) < 1e-5 && fabs(p[1]) < 1e-5 && fabs(p[2]) < 1e-5);
     assert_true(p[3] == 7 && p[4] == 8 && p[5] == 9); /* rotary axes untouched by arcs */
-    assert_true(fabs(t[2] + 1) < 1e-5); /* arriving at +X going towards -Z */
+    assert_true(fabs(t[2] + 1) < 1e-5);               /* arriving at +X going towards -Z */
     fd_check(&g, 1.0);
     /* G19 G2 (clockwise about +X) with a helix */
     const lsm_real s2[3] = {0, 3, 0}, e2[3] = {1, -3, 0}, c2[3] = {0, 0, 0};
@@ -861,9 +883,12 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_geom),         cmocka_unit_test(test_line_line_closed_form),
-        cmocka_unit_test(test_scaling),      cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_apply_and_limits), cmocka_unit_test(test_random_corners),
+        cmocka_unit_test(test_geom),
+        cmocka_unit_test(test_line_line_closed_form),
+        cmocka_unit_test(test_scaling),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_apply_and_limits),
+        cmocka_unit_test(test_random_corners),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

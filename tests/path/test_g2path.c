@@ -42,8 +42,14 @@ static uint64_t g_rng;
 static lsm_clothoid g_out[CAP];
 
 /* the shared generator (lsm_test_rng.h) on this test's state */
-static double urand(void) { return test_urand(&g_rng); }
-static double uni(double a, double b) { return test_uni(&g_rng, a, b); }
+static double urand(void)
+{
+    return test_urand(&g_rng);
+}
+static double uni(double a, double b)
+{
+    return test_uni(&g_rng, a, b);
+}
 
 /* ---- independent end state of a clothoid (Gauss-Legendre, 12 nodes, panels turning <= 0.1 rad) ---- */
 #define GL_N 12
@@ -153,8 +159,8 @@ static void test_paper_reproduction(void **state)
     assert_int_equal(lsm_g2path_build(c, 3, LSM_GEOM_PLANE_XY, 6, 50, 500, g_out, CAP, &r), LSM_OK);
     print_message("6 segments: deviation from the polygon %.4f mm, from the contour %.4f mm, c_max %.5f, kappa_max "
                   "%.5f, feed limits %.1f / %.1f mm/min\n",
-                  (double)r.dev_chord_mm, (double)r.dev_mm, (double)r.sharpness_max_per_mm2,
-                  (double)r.kappa_max_per_mm, 60 * (double)r.feed_jerk_mm_s, 60 * (double)r.feed_acc_mm_s);
+                  (double)r.dev_chord_mm, (double)r.dev_mm, (double)r.sharpness_max_per_mm2, (double)r.kappa_max_per_mm,
+                  60 * (double)r.feed_jerk_mm_s, 60 * (double)r.feed_acc_mm_s);
     const double rt = IS_F ? 1e-3 : 5e-4; /* NOTES.md gives 3-4 digits */
     assert_true(fabs(r.dev_chord_mm - 0.945) < rt * 0.945 + 0.0005);
     assert_true(fabs(r.sharpness_max_per_mm2 - 0.00817) < 0.000005 + rt * 0.00817);
@@ -329,7 +335,7 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     gl_init();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_paper_reproduction), cmocka_unit_test(test_scaling), cmocka_unit_test(test_auto),
+        cmocka_unit_test(test_paper_reproduction), cmocka_unit_test(test_scaling),   cmocka_unit_test(test_auto),
         cmocka_unit_test(test_random_contours),    cmocka_unit_test(test_bad_input),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));

@@ -54,7 +54,8 @@ static void test_rounded_centre_random(void **state)
         const double sw = 0.05 + 6.0 * test_urand(&rng), dir = test_urand(&rng) < 0.5 ? 1 : -1;
         const double cx = 400 * test_urand(&rng) - 200, cy = 400 * test_urand(&rng) - 200;
         const double q = 1e-4; /* CAM rounding of every coordinate (4 decimals) */
-        lsm_real s[3] = {(lsm_real)(round((cx + R * cos(a0)) / q) * q), (lsm_real)(round((cy + R * sin(a0)) / q) * q), 0};
+        lsm_real s[3] = {(lsm_real)(round((cx + R * cos(a0)) / q) * q), (lsm_real)(round((cy + R * sin(a0)) / q) * q),
+                         0};
         lsm_real e[3] = {(lsm_real)(round((cx + R * cos(a0 + dir * sw)) / q) * q),
                          (lsm_real)(round((cy + R * sin(a0 + dir * sw)) / q) * q), 0};
         lsm_real c[3] = {(lsm_real)(round(cx / q) * q), (lsm_real)(round(cy / q) * q), 0};
@@ -66,7 +67,8 @@ static void test_rounded_centre_random(void **state)
             continue;
         }
         const double chord = hypot((double)e[0] - s[0], (double)e[1] - s[1]);
-        const double dr = fabs(hypot((double)e[0] - c[0], (double)e[1] - c[1]) - hypot((double)s[0] - c[0], (double)s[1] - c[1]));
+        const double dr =
+            fabs(hypot((double)e[0] - c[0], (double)e[1] - c[1]) - hypot((double)s[0] - c[0], (double)s[1] - c[1]));
         const double shift = dr * (2 * R) / (2 * (chord > 0 ? chord : 1e-300));
         const double miss = end_miss(&g, e);
         /* corrected: exact to rounding; kept: off by at most the radius mismatch */

@@ -201,12 +201,12 @@ typedef struct trace { /* interpolator state per cycle (TEST_TRACE: printed arou
 
 typedef struct run_res {
     trace *tr;
-    double *q;             /* 3 per cycle */
+    double *q; /* 3 per cycle */
     long n;
     int done;
-    int parse_err;         /* the parser or the planner refused the program (skipped) */
-    double end[3];         /* the parser's final position */
-    double max_len;        /* longest block appended */
+    int parse_err;  /* the parser or the planner refused the program (skipped) */
+    double end[3];  /* the parser's final position */
+    double max_len; /* longest block appended */
     uint32_t fallbacks;
 } run_res;
 
@@ -254,8 +254,8 @@ static int parse(const text *t, const machine *m, const double at[3], blk_in **o
             }
             v[n].b = res.blocks[k];
             v[n].tol_mm = res.modal.blend == LSM_GCODE_EXACT_STOP ? 0
-                          : res.modal.blend_tol_mm > 0          ? (double)res.modal.blend_tol_mm
-                                                                 : m->blend_tol_mm;
+                          : res.modal.blend_tol_mm > 0            ? (double)res.modal.blend_tol_mm
+                                                                  : m->blend_tol_mm;
             n++;
         }
     }
@@ -313,7 +313,8 @@ static void run(const text *t, const machine *m, const double at[3], uint32_t ca
                 lsm_real e[LSM_MAX_AXES] = {0}, b0[LSM_MAX_AXES] = {0};
                 lsm_geom_eval(g0, g0->len, e, NULL, NULL);
                 lsm_geom_eval(g1, 0, b0, NULL, NULL);
-                const double gap = fmax(fmax(fabs((double)e[0] - b0[0]), fabs((double)e[1] - b0[1])), fabs((double)e[2] - b0[2]));
+                const double gap =
+                    fmax(fmax(fabs((double)e[0] - b0[0]), fabs((double)e[1] - b0[1])), fabs((double)e[2] - b0[2]));
                 if (gap > 1e-5)
                     print_message("gap %u->%u kind %d->%d: %.3g (len %g %g)\n", id, id + 1, g0->kind, g1->kind, gap,
                                   (double)g0->len, (double)g1->len);
@@ -335,8 +336,8 @@ static void run(const text *t, const machine *m, const double at[3], uint32_t ca
             else if ((r->n & (r->n - 1)) == 0 && r->n >= (1 << 14))
                 r->tr = realloc(r->tr, (size_t)cap * sizeof *r->tr);
             const lsm_pblock *b = lsm_planner_block(&pl, ip.blk);
-            r->tr[r->n] = (trace){ip.blk, ip.serial, b ? b->g.kind : 0, ip.phase, (double)ip.off_mm, (double)ip.tau,
-                                  (double)ip.v_mm_s};
+            r->tr[r->n] = (trace){ip.blk,         ip.serial,        b ? b->g.kind : 0, ip.phase, (double)ip.off_mm,
+                                  (double)ip.tau, (double)ip.v_mm_s};
         }
         r->n++;
         if (s == LSM_INTERP_DONE) {
@@ -348,9 +349,10 @@ out:
     if (!r->done && r->tr && r->n > 3)
         for (long i = r->n - 3; i < r->n; i++)
             print_message("  not done %ld: %.9f %.9f %.9f blk %u kind %u piece %u phase %u off %.9g tau %.9g v %.6g "
-                          "state %d head %u tail %u len %.9g\n", i, r->q[3 * i], r->q[3 * i + 1], r->q[3 * i + 2],
-                          r->tr[i].blk, r->tr[i].kind, r->tr[i].serial, r->tr[i].phase, r->tr[i].off, r->tr[i].tau,
-                          r->tr[i].v, ip.state, pl.head, pl.tail,
+                          "state %d head %u tail %u len %.9g\n",
+                          i, r->q[3 * i], r->q[3 * i + 1], r->q[3 * i + 2], r->tr[i].blk, r->tr[i].kind,
+                          r->tr[i].serial, r->tr[i].phase, r->tr[i].off, r->tr[i].tau, r->tr[i].v, ip.state, pl.head,
+                          pl.tail,
                           lsm_planner_block(&pl, ip.blk) ? (double)lsm_planner_block(&pl, ip.blk)->g.len : -1.0);
     free(store);
     free(v);
@@ -370,8 +372,8 @@ static double ulp_of(double x)
 }
 
 typedef struct worst {
-    double ratio;      /* largest |d^n q| / (limit + bound) */
-    double ulps;       /* largest excess over the limit, in ulp / dt^n units: (|d^n q| - limit dt^n) / ulp */
+    double ratio; /* largest |d^n q| / (limit + bound) */
+    double ulps;  /* largest excess over the limit, in ulp / dt^n units: (|d^n q| - limit dt^n) / ulp */
 } worst;
 
 /* Returns 0 if every axis holds its limits within the noise bound; else prints the worst sample. */
@@ -411,8 +413,9 @@ static int check_limits(const run_res *r, const machine *m, const char *what, lo
                                   (x - lim[o] * dtn) / ulp_of(M), M);
                     for (long i = kk - 6; r->tr && i <= kk + 2 && i < r->n; i++)
                         if (i >= 0)
-                            print_message("  %ld: %.9f %.9f %.9f blk %u kind %u piece %u phase %u off %.9g tau %.9g v %.6g\n", i,
-                                          r->q[3 * i], r->q[3 * i + 1], r->q[3 * i + 2], r->tr[i].blk, r->tr[i].kind,
+                            print_message("  %ld: %.9f %.9f %.9f blk %u kind %u piece %u phase %u off %.9g tau %.9g v "
+                                          "%.6g\n",
+                                          i, r->q[3 * i], r->q[3 * i + 1], r->q[3 * i + 2], r->tr[i].blk, r->tr[i].kind,
                                           r->tr[i].serial, r->tr[i].phase, r->tr[i].off, r->tr[i].tau, r->tr[i].v);
                 }
             }
@@ -541,8 +544,7 @@ static void test_golden(void **state)
     golden("G1 X13.5 Y12.5 F1200\nG3 X11 Y10 R10000\nM2\n", &m, z, "R 10000, 2 ms");
     golden("G1 Y2 F10\nG3 Y0 R1000\nM2\n", &m, z, "R 1000 back to 0, 2 ms");
     /* router.json's limits and cycle */
-    machine router = {0.001, {250, 250, 100}, {3000, 3000, 1500}, {60000, 60000, 30000}, {1.18e7, 1.18e7, 5.9e6},
-                      0.02};
+    machine router = {0.001, {250, 250, 100}, {3000, 3000, 1500}, {60000, 60000, 30000}, {1.18e7, 1.18e7, 5.9e6}, 0.02};
     golden("G1 X13.5 Y12.5 F1200\nG3 X11 Y10 R10000\nM2\n", &router, z, "R 10000, router");
     golden("G1 Y2 F10\nG3 Y0 R1000\nM2\n", &router, z, "R 1000 back to 0, router");
 }

@@ -40,13 +40,13 @@ static long g_count = 24;
 /* The same machine, workspace and counts in both builds (float: the noise bound of noise() below is the only
  * difference; test_path_limits.c derives it). */
 #define CYCLE 0.001
-#define SPAN 150.0    /* workspace half-width (mm) */
+#define SPAN 150.0 /* workspace half-width (mm) */
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* programs                                                                                                    */
 
 typedef struct cmd {
-    int arc;                 /* 0 line, 1 arc */
+    int arc; /* 0 line, 1 arc */
     double end[LSM_MAX_AXES];
     double centre[3];
     int plane, dir;
@@ -60,7 +60,7 @@ typedef struct prog {
     double start[LSM_MAX_AXES];
     double end[LSM_MAX_AXES];
     double max_tol;
-    lsm_geom path[1200];     /* programmed elements (for the deviation) */
+    lsm_geom path[1200]; /* programmed elements (for the deviation) */
 } prog;
 
 static double urand(uint64_t *s, double lo, double hi)
@@ -240,8 +240,8 @@ typedef struct run_opts {
     int n_ovr;
     long ovr_at[4];
     double ovr_val[4];
-    int no_prepare;          /* do not call lsm_interp_prepare (every piece is planned inside the cycle) */
-    uint32_t lead_cycles;    /* lsm_interp.lead_cycles: cruise switch points this many cycles ahead */
+    int no_prepare;       /* do not call lsm_interp_prepare (every piece is planned inside the cycle) */
+    uint32_t lead_cycles; /* lsm_interp.lead_cycles: cruise switch points this many cycles ahead */
 } run_opts;
 
 typedef struct run_res {
@@ -250,7 +250,7 @@ typedef struct run_res {
     int done;
     double vmax[3], amax[3], jmax[3];
     double max_dev;
-    double held_motion;      /* largest move while held */
+    double held_motion; /* largest move while held */
     long held_cycles;
     uint32_t fallbacks, underruns;
     uint32_t tick_plans, prepared;
@@ -409,7 +409,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     r->tick_plans = ip.tick_plans;
     r->prepared = ip.prepared;
     if (!r->done && getenv("TEST_DUMP"))
-        print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u running %d\n",
+        print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u "
+                      "running %d\n",
                       next, p->n, fin, ip.state, lsm_planner_count(&pl), lsm_planner_free(&pl), pl.fit_n, ip.blk,
                       pl.head, pl.tail, ip.running);
     if (!r->done && getenv("TEST_DUMP")) {
@@ -644,7 +645,7 @@ static void test_resume_after_underrun(void **state)
     lsm_interp ip;
     assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
     const double s = SPAN / 150.0;
-    const double pts[6][2] = {{20 * s, 0}, {30 * s, 8 * s}, {45 * s, 8 * s}, /* first batch */
+    const double pts[6][2] = {{20 * s, 0},      {30 * s, 8 * s},  {45 * s, 8 * s}, /* first batch */
                               {50 * s, -5 * s}, {60 * s, -5 * s}, {70 * s, 10 * s}};
     lsm_planner_move mv = {(lsm_real)(60 * s + 10), (lsm_real)0.02, 0, 0};
     long n = 0, idle_at = -1, idle_cycles = 0;
@@ -652,7 +653,8 @@ static void test_resume_after_underrun(void **state)
     lsm_interp_state st = LSM_INTERP_IDLE;
     for (int batch = 0; batch < 2; batch++) {
         for (int k = 0; k < 3; k++) {
-            const lsm_real e[LSM_MAX_AXES] = {(lsm_real)pts[3 * batch + k][0], (lsm_real)pts[3 * batch + k][1], 0, 0, 0, 0};
+            const lsm_real e[LSM_MAX_AXES] =
+                {(lsm_real)pts[3 * batch + k][0], (lsm_real)pts[3 * batch + k][1], 0, 0, 0, 0};
             assert_int_equal(lsm_planner_append_line(&pl, e, &mv), LSM_OK);
         }
         if (batch == 0)
@@ -681,7 +683,8 @@ static void test_resume_after_underrun(void **state)
             assert_true(idle_at > 0);
             assert_int_equal(idle_cycles, 300);
             /* the underrun stop is exactly the end of the last block, and the machine stays there */
-            assert_true(q[3 * idle_at] == (double)(lsm_real)pts[2][0] && q[3 * idle_at + 1] == (double)(lsm_real)pts[2][1]);
+            assert_true(q[3 * idle_at] == (double)(lsm_real)pts[2][0] &&
+                        q[3 * idle_at + 1] == (double)(lsm_real)pts[2][1]);
             assert_true(q[3 * (n - 1)] == q[3 * idle_at] && q[3 * (n - 1) + 1] == q[3 * idle_at + 1]);
         }
     }
@@ -697,7 +700,8 @@ static void test_resume_after_underrun(void **state)
             am = fmax(am, fabs(x[3 * k] - 2 * x[3 * (k - 1)] + x[3 * (k - 2)]) / (dt * dt));
             jm = fmax(jm, fabs(x[3 * k] - 3 * x[3 * (k - 1)] + 3 * x[3 * (k - 2)] - x[3 * (k - 3)]) / (dt * dt * dt));
         }
-        if (vm > (double)cfg.axis[a].v_max * (1 + 1e-6) + noise(1) || am > (double)cfg.axis[a].a_max * (1 + 1e-6) + noise(2) ||
+        if (vm > (double)cfg.axis[a].v_max * (1 + 1e-6) + noise(1) ||
+            am > (double)cfg.axis[a].a_max * (1 + 1e-6) + noise(2) ||
             jm > (double)cfg.axis[a].j_max * (1 + 1e-6) + noise(3))
             fail_msg("resume after underrun: axis %d v %g a %g j %g", a, vm, am, jm);
     }
@@ -804,11 +808,12 @@ int main(int argc, char **argv)
         g_count = strtol(argv[2], NULL, 10);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_block_size), cmocka_unit_test(test_bad_blocks), cmocka_unit_test(test_lines),
-        cmocka_unit_test(test_arcs),       cmocka_unit_test(test_mixed),      cmocka_unit_test(test_dense),
-        cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),  cmocka_unit_test(test_underrun),
-        cmocka_unit_test(test_resume_after_underrun), cmocka_unit_test(test_no_prepare),
-        cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_block_size),  cmocka_unit_test(test_bad_blocks),
+        cmocka_unit_test(test_lines),       cmocka_unit_test(test_arcs),
+        cmocka_unit_test(test_mixed),       cmocka_unit_test(test_dense),
+        cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),
+        cmocka_unit_test(test_underrun),    cmocka_unit_test(test_resume_after_underrun),
+        cmocka_unit_test(test_no_prepare),  cmocka_unit_test(test_lead_cycles),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -108,11 +108,11 @@ static void test_stale_ack(void **state)
     (void)setup_lines(2);
     assert_false(lsm_planner_piece_stale(&g_pl));
     const uint32_t seen = lsm_planner_stale_count(&g_pl); /* a piece is planned now */
-    lsm_atomic_put_release(&g_pl.stale_set, seen + 1u);     /* the background invalidates the current piece */
+    lsm_atomic_put_release(&g_pl.stale_set, seen + 1u);   /* the background invalidates the current piece */
     assert_true(lsm_planner_piece_stale(&g_pl));
-    lsm_atomic_put_release(&g_pl.stale_set, seen + 2u);     /* ... and the piece planned before it */
-    lsm_planner_post_stale_ack(&g_pl, seen + 1u);           /* the tick takes that piece */
-    assert_true(lsm_planner_piece_stale(&g_pl));            /* still stale: it was planned before the change */
+    lsm_atomic_put_release(&g_pl.stale_set, seen + 2u); /* ... and the piece planned before it */
+    lsm_planner_post_stale_ack(&g_pl, seen + 1u);       /* the tick takes that piece */
+    assert_true(lsm_planner_piece_stale(&g_pl));        /* still stale: it was planned before the change */
     lsm_planner_post_stale_ack(&g_pl, seen + 2u);
     assert_false(lsm_planner_piece_stale(&g_pl));
 }
@@ -182,7 +182,9 @@ static void test_threads(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_release), cmocka_unit_test(test_horizon), cmocka_unit_test(test_stale_ack),
+        cmocka_unit_test(test_release),
+        cmocka_unit_test(test_horizon),
+        cmocka_unit_test(test_stale_ack),
 #ifdef LSM_TEST_THREADS
         cmocka_unit_test(test_threads),
 #endif

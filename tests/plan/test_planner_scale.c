@@ -41,8 +41,8 @@ static unsigned long g_seed = 1;
 static long g_points = 6000;
 
 #if LSM_REAL_IS_FLOAT
-#define CYCLE 0.004  /* float positions: a longer cycle keeps the rounding noise of the 3rd difference small */
-#define RADIUS 30.0  /* float arcs are fitted up to about R 40 at a 0.01 mm fit tolerance (planner.h) */
+#define CYCLE 0.004 /* float positions: a longer cycle keeps the rounding noise of the 3rd difference small */
+#define RADIUS 30.0 /* float arcs are fitted up to about R 40 at a 0.01 mm fit tolerance (planner.h) */
 #else
 #define CYCLE 0.001
 #define RADIUS 40.0
@@ -62,11 +62,11 @@ static const char *const k_names[SH_COUNT] = {"circle", "spiral", "ellipse", "ri
 typedef struct shape {
     shape_kind kind;
     long n;
-    double c[3];     /* centre */
-    double th;       /* running angle (parameter) */
+    double c[3]; /* centre */
+    double th;   /* running angle (parameter) */
     double phase;
-    double r;        /* spiral radius */
-    double p[3];     /* last point */
+    double r;    /* spiral radius */
+    double p[3]; /* last point */
 } shape;
 
 static void shape_init(shape *s, shape_kind kind, long n, uint64_t *rs)
@@ -152,11 +152,11 @@ static int shape_smooth(shape_kind k)
 /* the run                                                                                                     */
 
 typedef struct scale_res {
-    double T_s;             /* machine time */
-    double L_mm;            /* programmed length */
-    double q_s[4];          /* machine time per quarter of the program */
-    double cost[WINDOWS];   /* (checks + bp_nodes) per point, by eighth of the points appended */
-    double pieces[WINDOWS]; /* pieces per point */
+    double T_s;                                /* machine time */
+    double L_mm;                               /* programmed length */
+    double q_s[4];                             /* machine time per quarter of the program */
+    double cost[WINDOWS];                      /* (checks + bp_nodes) per point, by eighth of the points appended */
+    double pieces[WINDOWS];                    /* pieces per point */
     double vmax_ratio, amax_ratio, jmax_ratio; /* largest axis v, a, j over the limit */
     uint32_t fallbacks, corners;
     int end_exact;
@@ -266,7 +266,9 @@ static void run_shape(shape_kind kind, long n, uint64_t seed, scale_res *r)
     for (int m = 0; m < 4; m++)
         r->q_s[m] = (double)(quarter_cycle[m + 1] - quarter_cycle[m]) * dt;
     r->end_exact = pos[0] == (lsm_real)p[0] && pos[1] == (lsm_real)p[1] && pos[2] == (lsm_real)p[2];
-    r->end_err = fmax(fabs((double)pos[0] - (double)(lsm_real)p[0]), fmax(fabs((double)pos[1] - (double)(lsm_real)p[1]), fabs((double)pos[2] - (double)(lsm_real)p[2])));
+    r->end_err =
+        fmax(fabs((double)pos[0] - (double)(lsm_real)p[0]),
+             fmax(fabs((double)pos[1] - (double)(lsm_real)p[1]), fabs((double)pos[2] - (double)(lsm_real)p[2])));
     r->fallbacks = pl.stats.plan_fallbacks;
     r->corners = pl.stats.corners;
 }
@@ -288,9 +290,8 @@ static void check_shape(shape_kind kind)
     print_message("%-8s points %ld  L/F %.2f s  T %.2f s (%.3f L/F; bound %.2f)  quarters %.2f %.2f %.2f %.2f s  "
                   "verif+nodes/point first %.3f max later %.3f  pieces/point first %.4f max later %.4f  corners %u  "
                   "v %.3f a %.3f j %.3f of limits\n",
-                  k_names[kind], n, r.L_mm / FEED, r.T_s, r.T_s / (r.L_mm / FEED), bound, r.q_s[0], r.q_s[1],
-                  r.q_s[2], r.q_s[3], r.cost[0], cmax, r.pieces[0], pmax, r.corners, r.vmax_ratio, r.amax_ratio,
-                  r.jmax_ratio);
+                  k_names[kind], n, r.L_mm / FEED, r.T_s, r.T_s / (r.L_mm / FEED), bound, r.q_s[0], r.q_s[1], r.q_s[2],
+                  r.q_s[3], r.cost[0], cmax, r.pieces[0], pmax, r.corners, r.vmax_ratio, r.amax_ratio, r.jmax_ratio);
     if (!(r.end_exact && r.fallbacks == 0 && r.vmax_ratio <= 1.0 + 1e-6 && r.amax_ratio <= 1.0 + 1e-6 &&
           r.jmax_ratio <= 1.0 + 1e-6))
         print_message("FAILED %s: seed %lu, points %ld (end exact %d, off by %.3g mm, fallbacks %u)\n", k_names[kind],
@@ -309,8 +310,8 @@ static void check_shape(shape_kind kind)
     /* no slowdown as the run goes on: the middle quarters take the same time */
     const double qa = r.q_s[1], qb = r.q_s[2];
     if (!(qb <= 1.05 * qa && qa <= 1.05 * qb))
-        print_message("FAILED %s: seed %lu, points %ld: quarters 2 and 3 take %.3f and %.3f s\n", k_names[kind],
-                      g_seed, n, qa, qb);
+        print_message("FAILED %s: seed %lu, points %ld: quarters 2 and 3 take %.3f and %.3f s\n", k_names[kind], g_seed,
+                      n, qa, qb);
     assert_true(qb <= 1.05 * qa && qa <= 1.05 * qb);
     /* cost per point flat from the first points to the last */
     if (!(cmax <= 2.0 * r.cost[0] + 0.5 && pmax <= 2.0 * r.pieces[0] + 0.05))
@@ -451,8 +452,7 @@ static void test_crawl_random(void **state)
         }
         const double t64 = run_lines(pts, f, n, 0.01, 2000.0), t61 = run_lines(pts, f, n, 0.0, 2000.0);
         const double bound = t61 / (1.0 - LSM_PLANNER_NODE_DROP) + 0.1;
-        if (!(t64 > 0 && t61 > 0 && t64 <= bound))
-        {
+        if (!(t64 > 0 && t61 > 0 && t64 <= bound)) {
             print_message("FAILED crawl_random: seed %lu, program %ld: G64 %.3f s, G61 %.3f s\n", g_seed, c, t64, t61);
             for (int i = 1; i < n; i++)
                 print_message("  G1 X%.4f Y%.4f Z%.4f F%.3f\n", pts[i][0], pts[i][1], pts[i][2], f[i] * 60.0);
@@ -482,8 +482,8 @@ int main(int argc, char **argv)
     g_points = (long)test_arg_u(argc, argv, 2, 6000);
     print_message("seed %lu, points %ld per shape\n", g_seed, g_points);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_circle), cmocka_unit_test(test_spiral), cmocka_unit_test(test_ellipse),
-        cmocka_unit_test(test_ring3d), cmocka_unit_test(test_raster), cmocka_unit_test(test_crawl),
+        cmocka_unit_test(test_circle),       cmocka_unit_test(test_spiral),    cmocka_unit_test(test_ellipse),
+        cmocka_unit_test(test_ring3d),       cmocka_unit_test(test_raster),    cmocka_unit_test(test_crawl),
         cmocka_unit_test(test_crawl_random), cmocka_unit_test(test_ring_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -27,7 +27,8 @@ typedef struct {
 
 /* Kombarov 2019, Table 1 (units m, s). Test 4's jp0 is 9.626 (printed 6.685: typo). */
 static const table1_row k_table1[5] = {
-    {0.22, 1.57, 16, 25132, 0.001, 0.009, 0.019, 0.001, 16.000, 0.097, 0.116, 0.097, 1.568, 0.041, 0.041, 0.239, 16.035},
+    {0.22, 1.57, 16, 25132, 0.001, 0.009, 0.019, 0.001, 16.000, 0.097, 0.116, 0.097, 1.568, 0.041, 0.041, 0.239,
+     16.035},
     {0.22, 1.57, 16, 560, 0.044, 0.066, 0.067, 0.044, 15.686, 0.056, 0.054, 0.054, 1.537, 0.001, 0.001, 0.285, 15.699},
     {0.08, 1.57, 16, 560, 0.044, 0.066, 0.048, 0.044, 15.686, 0.056, 0.009, 0.009, 0.831, -0.001, 0, 0.194, 15.561},
     {0.015, 1.57, 16, 560, 0.044, 0.066, 0.027, 0.027, 9.626, 0.136, 0.001, 0.001, 0.270, 0.001, 0.001, 0.111, 9.566},
@@ -50,7 +51,8 @@ static void test_table1_paper_rule(void **state)
         lsm_scurve_limits lim = {(lsm_real)r->A, (lsm_real)r->J, (lsm_real)r->DJ};
         lsm_scurve sc;
         lsm_scurve_info inf;
-        assert_int_equal(lsm_scurve_plan(&sc, &lim, (lsm_real)DT, 0, (lsm_real)r->dF, LSM_SCURVE_RULE_PAPER, &inf), LSM_OK);
+        assert_int_equal(lsm_scurve_plan(&sc, &lim, (lsm_real)DT, 0, (lsm_real)r->dF, LSM_SCURVE_RULE_PAPER, &inf),
+                         LSM_OK);
         close3(inf.dt1j_s, r->dt1j, "dt1J", i);
         close3(inf.dt1a_s, r->dt1a, "dt1A", i);
         close3(inf.dt1f_s, r->dt1f, "dt1F", i);
@@ -84,7 +86,8 @@ static void test_table1_paper_exceeds_strict_does_not(void **state)
     for (int i = 0; i < 5; i++) {
         r = &k_table1[i];
         lsm_scurve_limits l2 = {(lsm_real)r->A, (lsm_real)r->J, (lsm_real)r->DJ};
-        assert_int_equal(lsm_scurve_plan(&sc, &l2, (lsm_real)DT, 0, (lsm_real)r->dF, LSM_SCURVE_RULE_STRICT, &inf), LSM_OK);
+        assert_int_equal(lsm_scurve_plan(&sc, &l2, (lsm_real)DT, 0, (lsm_real)r->dF, LSM_SCURVE_RULE_STRICT, &inf),
+                         LSM_OK);
         assert_true(sc.jp_mm_s3 <= l2.j_max_mm_s3);
         assert_true(inf.ap_final_mm_s2 <= l2.a_max_mm_s2);
         assert_true(inf.snap_final_mm_s4 <= l2.snap_max_mm_s4);
@@ -137,7 +140,8 @@ static void test_closed_form_vs_integration(void **state)
         lsm_scurve_limits lim = {(lsm_real)r->A, (lsm_real)r->J, (lsm_real)r->DJ};
         lsm_scurve sc;
         assert_int_equal(lsm_scurve_plan(&sc, &lim, (lsm_real)DT, (lsm_real)0.05, (lsm_real)(0.05 + r->dF),
-                                         LSM_SCURVE_RULE_STRICT, NULL), LSM_OK);
+                                         LSM_SCURVE_RULE_STRICT, NULL),
+                         LSM_OK);
         const double tp = lsm_scurve_duration_s(&sc);
         /* steps aligned with the cycles, so every kink of the jerk falls on a step boundary */
         const int steps = (int)lsm_scurve_total_cycles(&sc.iv) * 64;
@@ -172,7 +176,8 @@ static void test_boundary_conditions(void **state)
     for (int i = 0; i < 4; i++) {
         lsm_scurve sc;
         assert_int_equal(lsm_scurve_plan(&sc, &lim, (lsm_real)DT, (lsm_real)pairs[i][0], (lsm_real)pairs[i][1],
-                                         LSM_SCURVE_RULE_STRICT, NULL), LSM_OK);
+                                         LSM_SCURVE_RULE_STRICT, NULL),
+                         LSM_OK);
         lsm_kin k0, k1;
         lsm_scurve_eval(&sc, 0, &k0);
         lsm_scurve_eval(&sc, lsm_scurve_duration_s(&sc), &k1);
@@ -205,7 +210,8 @@ static void test_deceleration_mirrors_acceleration(void **state)
     lsm_scurve_limits lim = {1.57, 16, 560};
     lsm_scurve up, down;
     assert_int_equal(lsm_scurve_plan(&up, &lim, (lsm_real)DT, 0, (lsm_real)0.22, LSM_SCURVE_RULE_STRICT, NULL), LSM_OK);
-    assert_int_equal(lsm_scurve_plan(&down, &lim, (lsm_real)DT, (lsm_real)0.22, 0, LSM_SCURVE_RULE_STRICT, NULL), LSM_OK);
+    assert_int_equal(lsm_scurve_plan(&down, &lim, (lsm_real)DT, (lsm_real)0.22, 0, LSM_SCURVE_RULE_STRICT, NULL),
+                     LSM_OK);
     assert_int_equal(up.iv.n1_cycles, down.iv.n1_cycles);
     assert_int_equal(up.iv.n2_cycles, down.iv.n2_cycles);
     assert_int_equal(up.iv.n4_cycles, down.iv.n4_cycles);
@@ -268,14 +274,10 @@ static void test_bad_input(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_table1_paper_rule),
-        cmocka_unit_test(test_table1_paper_exceeds_strict_does_not),
-        cmocka_unit_test(test_strict_is_shortest),
-        cmocka_unit_test(test_closed_form_vs_integration),
-        cmocka_unit_test(test_boundary_conditions),
-        cmocka_unit_test(test_deceleration_mirrors_acceleration),
-        cmocka_unit_test(test_zero_change),
-        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_table1_paper_rule),   cmocka_unit_test(test_table1_paper_exceeds_strict_does_not),
+        cmocka_unit_test(test_strict_is_shortest),  cmocka_unit_test(test_closed_form_vs_integration),
+        cmocka_unit_test(test_boundary_conditions), cmocka_unit_test(test_deceleration_mirrors_acceleration),
+        cmocka_unit_test(test_zero_change),         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

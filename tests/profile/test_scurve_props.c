@@ -30,19 +30,25 @@ static unsigned long g_seed = 1;
 static long g_count = 20000;
 
 static uint64_t rng_state;
-static double urand(void) { return test_urand(&rng_state); }
-static double logu(double lo, double hi) { return test_logu(&rng_state, lo, hi); }
+static double urand(void)
+{
+    return test_urand(&rng_state);
+}
+static double logu(double lo, double hi)
+{
+    return test_logu(&rng_state, lo, hi);
+}
 
 static const double k_cycles[5] = {0.00025, 0.0005, 0.001, 0.002, 0.004};
 
-#define CHECK(cond, ...)                                                                                              \
-    do {                                                                                                              \
-        if (!(cond)) {                                                                                                \
-            print_error("case %ld (seed %lu): ", c, g_seed);                                                         \
-            print_error(__VA_ARGS__);                                                                                 \
-            print_error("\n");                                                                                        \
-            fail();                                                                                                   \
-        }                                                                                                             \
+#define CHECK(cond, ...)                                     \
+    do {                                                     \
+        if (!(cond)) {                                       \
+            print_error("case %ld (seed %lu): ", c, g_seed); \
+            print_error(__VA_ARGS__);                        \
+            print_error("\n");                               \
+            fail();                                          \
+        }                                                    \
     } while (0)
 
 static void test_velocity_changes(void **state)
@@ -56,7 +62,8 @@ static void test_velocity_changes(void **state)
         lsm_scurve_limits lim = {(lsm_real)A, (lsm_real)J, (lsm_real)DJ};
         lsm_scurve sc;
         lsm_scurve_info inf;
-        lsm_status st = lsm_scurve_plan(&sc, &lim, (lsm_real)dt, (lsm_real)v0, (lsm_real)v1, LSM_SCURVE_RULE_STRICT, &inf);
+        lsm_status st =
+            lsm_scurve_plan(&sc, &lim, (lsm_real)dt, (lsm_real)v0, (lsm_real)v1, LSM_SCURVE_RULE_STRICT, &inf);
         if (st == LSM_E_TOO_LONG)
             continue; /* more than 2^28 cycles: legitimately refused */
         CHECK(st == LSM_OK, "plan failed %d", (int)st);
@@ -78,8 +85,8 @@ static void test_velocity_changes(void **state)
                 lsm_scurve_eval_cycle(&sc, k, (lsm_real)(q / 4.0), &kin);
                 CHECK(fabs(kin.j_mm_s3) <= J * (1 + REL_TOL), "|J| %.17g > %.17g at t %g", (double)kin.j_mm_s3, J, t);
                 CHECK(fabs(kin.a_mm_s2) <= A * (1 + REL_TOL), "|A| %.17g > %.17g at t %g", (double)kin.a_mm_s2, A, t);
-                CHECK(kin.v_mm_s >= vlo - REL_TOL * vhi && kin.v_mm_s <= vhi * (1 + REL_TOL), "V %.17g outside [%g, %g]",
-                      (double)kin.v_mm_s, vlo, vhi);
+                CHECK(kin.v_mm_s >= vlo - REL_TOL * vhi && kin.v_mm_s <= vhi * (1 + REL_TOL),
+                      "V %.17g outside [%g, %g]", (double)kin.v_mm_s, vlo, vhi);
             }
             if (!LSM_REAL_IS_FLOAT && k < n) {
                 const double t = (k + 0.5) * dt, h = dt * 1e-3;
@@ -122,7 +129,10 @@ static void random_request(lsm_move_request *r)
     }
 }
 
-static double ax_dir(double d) { return d < 0 ? -1 : 1; }
+static double ax_dir(double d)
+{
+    return d < 0 ? -1 : 1;
+}
 
 /* Independent search for an exact whole-cycle single-axis profile (ramp, cruise, ramp) within the limits. */
 static bool brute_force_exact(const lsm_move_request *r)
@@ -147,7 +157,8 @@ static bool brute_force_exact(const lsm_move_request *r)
                     const double num = D - v0 * ta / 2 - v1 * td / 2;
                     for (int nc = 0; nc <= 400 && num > 0; nc++) {
                         const double den = ta / 2 + nc * dt + td / 2, vc = num / den;
-                        if (den > 0 && vc <= L->v_max_mm_s && lsm_scurve_fits(&sl, r->cycle_s, &ia, (lsm_real)(vc - v0)) &&
+                        if (den > 0 && vc <= L->v_max_mm_s &&
+                            lsm_scurve_fits(&sl, r->cycle_s, &ia, (lsm_real)(vc - v0)) &&
                             lsm_scurve_fits(&sl, r->cycle_s, &id, (lsm_real)(vc - v1)))
                             return true;
                     }
@@ -176,14 +187,16 @@ static void test_moves(void **state)
             lsm_scurve_limits sl = {r.lim[0].a_max_mm_s2, r.lim[0].j_max_mm_s3, r.lim[0].snap_max_mm_s4};
             lsm_scurve sc;
             CHECK(r.n_axes == 1, "multi-axis move from rest reported infeasible");
-            CHECK(lsm_scurve_plan(&sc, &sl, r.cycle_s, r.v0_mm_s[0], r.v1_mm_s[0], LSM_SCURVE_RULE_STRICT, NULL) == LSM_OK,
+            CHECK(lsm_scurve_plan(&sc, &sl, r.cycle_s, r.v0_mm_s[0], r.v1_mm_s[0], LSM_SCURVE_RULE_STRICT, NULL) ==
+                      LSM_OK,
                   "direct ramp");
             /* Either the direct ramp alone is longer than D, or no whole-cycle profile of this family lands on
              * D within the limits. The second is checked independently by brute force: ramp intervals from a
              * dense grid of targets, each also stretched at T4, and every cruise length up to 400 cycles. */
             const double direct = lsm_scurve_distance_mm(&sc), D = fabs((double)r.distance_mm[0]);
             if (direct <= D * (1 - 1e-6)) {
-                CHECK(!brute_force_exact(&r), "refused, but a whole-cycle profile exists: lissom-sim move --distance %.17g "
+                CHECK(!brute_force_exact(&r),
+                      "refused, but a whole-cycle profile exists: lissom-sim move --distance %.17g "
                       "--v0 %.17g --v1 %.17g --vmax %.17g --amax %.17g --jmax %.17g --snap-max %.17g --cycle %.17g",
                       (double)r.distance_mm[0], (double)r.v0_mm_s[0], (double)r.v1_mm_s[0], (double)r.lim[0].v_max_mm_s,
                       (double)r.lim[0].a_max_mm_s2, (double)r.lim[0].j_max_mm_s3, (double)r.lim[0].snap_max_mm_s4,
@@ -215,8 +228,8 @@ static void test_moves(void **state)
                 const double err = fabs((double)pos[i] - (double)kin.s_mm);
                 if (err > max_gen_err)
                     max_gen_err = err;
-                CHECK(err <= (LSM_REAL_IS_FLOAT ? 1e-5 : 1e-9) * scale, "stepgen %.17g vs closed form %.17g at k %u axis %u",
-                      (double)pos[i], (double)kin.s_mm, k, i);
+                CHECK(err <= (LSM_REAL_IS_FLOAT ? 1e-5 : 1e-9) * scale,
+                      "stepgen %.17g vs closed form %.17g at k %u axis %u", (double)pos[i], (double)kin.s_mm, k, i);
                 for (int q = 0; q < 2; q++) {
                     lsm_move_eval_cycle(&mv, i, k - 1, (lsm_real)(q ? 0.5 : 0.0), &kin);
                     CHECK(fabs(kin.v_mm_s) <= L->v_max_mm_s * (1 + REL_TOL), "axis %u v %.17g > %.17g", i,
@@ -265,13 +278,15 @@ static void test_moves(void **state)
                 lsm_kin ki;
                 lsm_move_eval_cycle(&mv, i, n / 3, 0, &ki);
                 const double want = (double)k0.s_mm * r.distance_mm[i] / r.distance_mm[0];
-                CHECK(fabs((double)ki.s_mm - want) <= (LSM_REAL_IS_FLOAT ? 1e-4 : 1e-9) * (fabs((double)r.distance_mm[i]) + 1),
+                CHECK(fabs((double)ki.s_mm - want) <=
+                          (LSM_REAL_IS_FLOAT ? 1e-4 : 1e-9) * (fabs((double)r.distance_mm[i]) + 1),
                       "axis %u off the line: %.17g vs %.17g", i, (double)ki.s_mm, want);
             }
         }
     }
     print_message("moves: %ld planned, %ld infeasible: %ld with v0/v1 too high for D, %ld with no exact whole-cycle "
-                  "profile (confirmed by brute force)\n", planned, infeasible, infeasible - quantised_out, quantised_out);
+                  "profile (confirmed by brute force)\n",
+                  planned, infeasible, infeasible - quantised_out, quantised_out);
     assert_true(planned > count / 2);
     assert_true(quantised_out * 100 <= planned); /* rare: under 1 % */
 }

@@ -32,7 +32,7 @@ static lsm_co_path_block blocks[16];
 typedef struct sim_axis {
     int64_t pos;
     int64_t goal;
-    uint32_t vel;     /* counts/s */
+    uint32_t vel; /* counts/s */
     bool moving;
 } sim_axis;
 

@@ -73,8 +73,8 @@ static void test_validate(void **state)
         {&p.aff_gain, 1.6, LSM_E_ARG, "aff_gain"},
         {&p.encoder_counts_per_mm, -1.0, LSM_E_ARG, "encoder_counts_per_mm"},
         {&p.servo_period_s, 0.0, LSM_E_CYCLE, "servo_period_s"},
-        {&p.servo_period_s, 1e-3, LSM_E_ARG, "servo_period_s"},   /* 1 kHz cannot resolve 100 Hz + 0.25 ms */
-        {&p.stiffness_N_m, 1e10, LSM_E_ARG, "servo_period_s"},   /* a 4 kHz resonance needs a finer step */
+        {&p.servo_period_s, 1e-3, LSM_E_ARG, "servo_period_s"}, /* 1 kHz cannot resolve 100 Hz + 0.25 ms */
+        {&p.stiffness_N_m, 1e10, LSM_E_ARG, "servo_period_s"},  /* a 4 kHz resonance needs a finer step */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         sim_drive_params_default(&p, false);
@@ -198,7 +198,7 @@ static void test_step_response(void **state)
 
 #define LL_MAX 8
 typedef struct {
-    int n;                        /* degree of D */
+    int n;                         /* degree of D */
     double d[LL_MAX], num[LL_MAX]; /* coefficients, ascending powers */
     int n_num;
     double complex root[LL_MAX], c[LL_MAX];
@@ -248,17 +248,17 @@ static void lin_loop_build(lin_loop *L, const sim_drive_params *p)
     const double tau = p->current_tau_s, Ti = p->vel_ti_s;
     const double Q[2] = {k, c}, Pl[3] = {k, b + c, ml}, mQ[3] = {k, c, mm}, lag[2] = {1, tau}, s1[2] = {0, 1};
     double R[LL_MAX], t1[LL_MAX], t2[LL_MAX], pos[LL_MAX];
-    int nR = poly_mul(mQ, 2, Pl, 2, R);              /* (m_m s^2 + Q) P_l */
+    int nR = poly_mul(mQ, 2, Pl, 2, R); /* (m_m s^2 + Q) P_l */
     int nt = poly_mul(Q, 1, Q, 1, t1);
-    nR = poly_add(R, nR, -1, t1, nt, R);              /* - Q^2 */
-    int np = poly_mul(s1, 1, Pl, 2, t1);               /* s P_l */
-    np = poly_add(t1, np, kv, Q, 1, pos);              /* kv Q + s P_l */
+    nR = poly_add(R, nR, -1, t1, nt, R);  /* - Q^2 */
+    int np = poly_mul(s1, 1, Pl, 2, t1);  /* s P_l */
+    np = poly_add(t1, np, kv, Q, 1, pos); /* kv Q + s P_l */
     memset(L, 0, sizeof *L);
     if (Ti > 0) {
         const double tis[2] = {0, Ti}, pi[2] = {1, Ti};
         int n1 = poly_mul(tis, 1, lag, 1, t1);
-        n1 = poly_mul(t1, n1, R, nR, t1);               /* Ti s (tau s + 1) R */
-        int n2 = poly_mul(pi, 1, pos, np, t2);          /* (Ti s + 1)(kv Q + s P_l) */
+        n1 = poly_mul(t1, n1, R, nR, t1);      /* Ti s (tau s + 1) R */
+        int n2 = poly_mul(pi, 1, pos, np, t2); /* (Ti s + 1)(kv Q + s P_l) */
         L->n = poly_add(t1, n1, kf * kp, t2, n2, L->d);
         L->n_num = poly_mul(pi, 1, Q, 1, L->num);
     } else {
@@ -312,8 +312,7 @@ static double lin_loop_H(const lin_loop *L, double t)
 }
 
 /* Largest |drive - reference| over `seconds` after a step of `step` (and the two responses' overshoots). */
-static double step_vs_analytic(const sim_drive_params *p, double step, double seconds, double *ov_drive,
-                               double *ov_ref)
+static double step_vs_analytic(const sim_drive_params *p, double step, double seconds, double *ov_drive, double *ov_ref)
 {
     lin_loop L;
     lin_loop_build(&L, p);
@@ -352,7 +351,8 @@ static void test_step_response_analytic(void **state)
         const char *name;
         bool p_only;
         double kv_1_s, max_dev; /* tolerance: fraction of the step at 62.5 us */
-    } cases[] = {{"P velocity loop", true, 40, 0.004}, {"PI velocity loop", false, 40, 0.004},
+    } cases[] = {{"P velocity loop", true, 40, 0.004},
+                 {"PI velocity loop", false, 40, 0.004},
                  {"PI velocity loop, kv 120", false, 120, 0.01}};
     sim_drive_params p;
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
@@ -401,8 +401,8 @@ static void test_current_limit(void **state)
     sim_drive_params_default(&p, false);
     /* a 50 mm step asks for far more than 8 A */
     step_stats s = step_response(&p, 50.0, 3.0);
-    printf("linear 50 mm step: overshoot %.3f %%, settled after %.3f s, i_max %.3f A (limit %.1f)\n",
-           100 * s.overshoot, s.settle_s, s.max_current, p.current_max_A);
+    printf("linear 50 mm step: overshoot %.3f %%, settled after %.3f s, i_max %.3f A (limit %.1f)\n", 100 * s.overshoot,
+           s.settle_s, s.max_current, p.current_max_A);
     assert_true(s.limited);
     assert_true(s.max_current <= p.current_max_A * (1 + 1e-12));
     assert_true(s.max_current > 0.99 * p.current_max_A);
@@ -509,7 +509,8 @@ static void test_feed_forward(void **state)
         }
     }
     printf("smooth 15 mm move: max following error %.4f mm (no FF), %.4f mm (velocity FF), %.4f mm (velocity + "
-           "acceleration FF)\n", emax[0], emax[1], emax[2]);
+           "acceleration FF)\n",
+           emax[0], emax[1], emax[2]);
     /* with both feed-forwards what is left is of the order of the spring's quasi-static deflection
      * m_l a / k (the rigid-body feed-forward ignores the compliance), 10.7 um here */
     sim_drive_params q;

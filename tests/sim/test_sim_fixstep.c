@@ -22,8 +22,14 @@
 static unsigned long g_seed = 1;
 static long g_count = 600;
 static uint64_t rs;
-static double urand(void) { return test_urand(&rs); }
-static double logu(double lo, double hi) { return test_logu(&rs, lo, hi); }
+static double urand(void)
+{
+    return test_urand(&rs);
+}
+static double logu(double lo, double hi)
+{
+    return test_logu(&rs, lo, hi);
+}
 
 static void test_integer_matches_double(void **state)
 {
@@ -75,8 +81,8 @@ static void test_integer_matches_double(void **state)
                     worst = err;
                 if (err > 1.0) {
                     print_error("move %ld axis %u cycle %u/%u (phase %u, m %u of %u): %lld counts vs reference %.3f\n",
-                                c, i, k, n, fx.phase, fx.m, prog.phase[fx.phase < LSM_FIX_PHASES ? fx.phase : 0].n_cycles,
-                                (long long)pc[i], ref);
+                                c, i, k, n, fx.phase, fx.m,
+                                prog.phase[fx.phase < LSM_FIX_PHASES ? fx.phase : 0].n_cycles, (long long)pc[i], ref);
                     fail();
                 }
             }

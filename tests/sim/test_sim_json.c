@@ -18,13 +18,17 @@
 
 static sim_json_tok g_toks[256];
 
-static int parse(const char *s, sim_json_error *e) { return sim_json_parse(s, strlen(s), g_toks, 256, e); }
+static int parse(const char *s, sim_json_error *e)
+{
+    return sim_json_parse(s, strlen(s), g_toks, 256, e);
+}
 
 static void test_valid(void **state)
 {
     (void)state;
-    const char *s = "{\n  \"a\": [1, -2.5e3, 0, 0.125, true, false, null],\n  \"b\": {\"c\": \"x\\u00e9\\ud83d\\ude00\\n\\\"\"},"
-                    "\n  \"d\": [], \"e\": {}, \"\\u0061b\": \"caf\xC3\xA9\"\n}";
+    const char *s =
+        "{\n  \"a\": [1, -2.5e3, 0, 0.125, true, false, null],\n  \"b\": {\"c\": \"x\\u00e9\\ud83d\\ude00\\n\\\"\"},"
+        "\n  \"d\": [], \"e\": {}, \"\\u0061b\": \"caf\xC3\xA9\"\n}";
     sim_json_error e;
     int n = parse(s, &e);
     if (n < 0)
@@ -103,8 +107,8 @@ static void test_strict(void **state)
     bad("[\"\\ude00\"]", "unpaired low surrogate", 1, 3);
     bad("[\"a\tb\"]", "control character", 1, 4);
     bad("[\"\xC3\x28\"]", "invalid UTF-8", 1, 3);
-    bad("[\"\xC0\xAF\"]", "invalid UTF-8", 1, 3);       /* overlong */
-    bad("[\"\xED\xA0\x80\"]", "invalid UTF-8", 1, 3);   /* encoded surrogate */
+    bad("[\"\xC0\xAF\"]", "invalid UTF-8", 1, 3);     /* overlong */
+    bad("[\"\xED\xA0\x80\"]", "invalid UTF-8", 1, 3); /* encoded surrogate */
     bad("\xEF\xBB\xBF{}", "byte-order mark", 1, 1);
     bad("[\"abc", "unterminated string", 1, 2);
     bad("[1, 2", "unterminated array", 1, 1);

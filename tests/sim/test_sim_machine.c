@@ -42,7 +42,8 @@ static void find_dir(void)
         snprintf(g_dir, sizeof g_dir, "%s", env);
         return;
     }
-    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR, "/host_sim/machines"); /* the repository (tests/CMakeLists.txt) */
+    snprintf(g_dir, sizeof g_dir, "%s%s", LSM_REPO_DIR,
+             "/host_sim/machines"); /* the repository (tests/CMakeLists.txt) */
 }
 
 static void assert_rel(double a, double b, double tol)
@@ -204,8 +205,12 @@ static void test_shipped_all(void **state)
 
 /* ---------------------------------------------------------------- bad files */
 
-#define TOP "\"format\": \"lissom-machine-1\", \"name\": \"t\", \"cycle_s\": 0.001, \"lookahead_blocks\": 8, \"blend_tol_mm\": 0.01"
-#define AXIS_X "{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, \"j_max_mm_s3\": 1e4, \"snap_max_mm_s4\": 1e6, \"counts_per_mm\": 100}"
+#define TOP                                                                                            \
+    "\"format\": \"lissom-machine-1\", \"name\": \"t\", \"cycle_s\": 0.001, \"lookahead_blocks\": 8, " \
+    "\"blend_tol_mm\": 0.01"
+#define AXIS_X                                                                                                      \
+    "{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, \"j_max_mm_s3\": 1e4, \"snap_max_mm_s4\": 1e6, " \
+    "\"counts_per_mm\": 100}"
 
 static void expect_bad(const char *text, sim_machine_status code, const char *needle1, const char *needle2)
 {
@@ -292,8 +297,7 @@ static void test_bad_files(void **state)
     expect_bad("{" TOP ", \"axes\": [{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, "
                "\"snap_max_mm_s4\": 1e6, \"counts_per_mm\": 100}]}",
                SIM_MACHINE_E_MISSING_KEY, "axes[0]: missing key \"j_max_mm_s3\"", NULL);
-    expect_bad("{" TOP ", \"axes\": [{\"v_max_mm_s\": 100}]}", SIM_MACHINE_E_MISSING_KEY, "missing key \"name\"",
-               NULL);
+    expect_bad("{" TOP ", \"axes\": [{\"v_max_mm_s\": 100}]}", SIM_MACHINE_E_MISSING_KEY, "missing key \"name\"", NULL);
     /* types */
     expect_bad("{\"format\": \"lissom-machine-1\", \"name\": \"t\", \"cycle_s\": \"0.001\", \"lookahead_blocks\": 8, "
                "\"blend_tol_mm\": 0.01, \"axes\": [" AXIS_X "]}",
@@ -361,10 +365,8 @@ int main(void)
 {
     find_dir();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_shipped_router),
-        cmocka_unit_test(test_shipped_papers),
-        cmocka_unit_test(test_shipped_all),
-        cmocka_unit_test(test_good_minimal_and_rotary),
+        cmocka_unit_test(test_shipped_router), cmocka_unit_test(test_shipped_papers),
+        cmocka_unit_test(test_shipped_all),    cmocka_unit_test(test_good_minimal_and_rotary),
         cmocka_unit_test(test_bad_files),
     };
     return cmocka_run_group_tests_name("sim_machine", tests, NULL, NULL);

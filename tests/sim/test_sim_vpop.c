@@ -140,8 +140,8 @@ static double rest_to_rest(double D, double V, double A, double J)
     return 2 * ramp_t(lo, A, J);
 }
 
-static void run_line(const double dir[3], double D, const double V[3], const double A[3], const double J[3],
-                     double F, double dt)
+static void run_line(const double dir[3], double D, const double V[3], const double A[3], const double J[3], double F,
+                     double dt)
 {
     line l = {{dir[0], dir[1], dir[2]}, D, F};
     sim_vpop_path p = {D, line_eval, F > 0 ? line_feed : NULL, &l, line_eval_d, NULL};
@@ -182,11 +182,11 @@ static void test_line_closed_form(void **state)
     (void)state;
     const double x[3] = {1, 0, 0}, d[3] = {1.0 / 3, 2.0 / 3, 2.0 / 3};
     const double V[3] = {250, 250, 100}, A[3] = {3000, 3000, 1500}, J[3] = {60000, 60000, 30000};
-    run_line(x, 100, V, A, J, 0, 0.001);   /* cruise at V, A reached */
-    run_line(x, 5, V, A, J, 0, 0.001);     /* A reached, V not */
-    run_line(x, 0.2, V, A, J, 0, 0.001);   /* pure jerk */
-    run_line(x, 50, V, A, J, 40, 0.001);   /* programmed feed 40 mm/s, A not reached */
-    run_line(d, 60, V, A, J, 0, 0.001);    /* diagonal: Z limits (x 1.5 tangential) */
+    run_line(x, 100, V, A, J, 0, 0.001); /* cruise at V, A reached */
+    run_line(x, 5, V, A, J, 0, 0.001);   /* A reached, V not */
+    run_line(x, 0.2, V, A, J, 0, 0.001); /* pure jerk */
+    run_line(x, 50, V, A, J, 40, 0.001); /* programmed feed 40 mm/s, A not reached */
+    run_line(d, 60, V, A, J, 0, 0.001);  /* diagonal: Z limits (x 1.5 tangential) */
     run_line(d, 3, V, A, J, 0, 0.002);
     const double Vb[3] = {500, 500, 500}, Ab[3] = {2500, 3000, 2100}, Jb[3] = {5000, 5000, 50000};
     run_line(x, 30, Vb, Ab, Jb, 2500.0 / 60, 0.006); /* the Beudaert machine at the trident's feed */
@@ -388,8 +388,8 @@ static void test_run_random_program(void **state)
     const long n_prog = g_count / 6 > 2 ? g_count / 6 : 2;
     for (long c = 0; c < n_prog; c++) {
         char text[4096];
-        int at = snprintf(text, sizeof text, "G21 G90 G17 G64 P0.01\nG0 X0 Y0 Z0\nG1 F%.0f\n",
-                          test_logu(&rng, 600, 6000));
+        int at =
+            snprintf(text, sizeof text, "G21 G90 G17 G64 P0.01\nG0 X0 Y0 Z0\nG1 F%.0f\n", test_logu(&rng, 600, 6000));
         for (int i = 0; i < 12; i++) {
             const double x = 30 * test_urand(&rng), y = 30 * test_urand(&rng), z = 2 * test_urand(&rng);
             const double u = test_urand(&rng);
@@ -419,8 +419,8 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_line_closed_form), cmocka_unit_test(test_fig3),
-        cmocka_unit_test(test_trident_bspline), cmocka_unit_test(test_random_bsplines),
-        cmocka_unit_test(test_run_trident), cmocka_unit_test(test_run_random_program),
+        cmocka_unit_test(test_trident_bspline),  cmocka_unit_test(test_random_bsplines),
+        cmocka_unit_test(test_run_trident),      cmocka_unit_test(test_run_random_program),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -27,21 +27,21 @@
 #include "interp.h"
 #include "planner.h"
 
-#define LSM_CONTOUR_BLOCKS 128u          /* look-ahead storage (blocks) */
-#define LSM_CONTOUR_CYCLE_US 1000u       /* control cycle (us) */
-#define LSM_CONTOUR_MAX_CYCLES 20000u    /* 20 s: a run that takes longer is stuck */
-#define LSM_CONTOUR_SAMPLE_EVERY 32u     /* sampled setpoints: cycles 0, 32, 64, ... and the last one */
+#define LSM_CONTOUR_BLOCKS 128u       /* look-ahead storage (blocks) */
+#define LSM_CONTOUR_CYCLE_US 1000u    /* control cycle (us) */
+#define LSM_CONTOUR_MAX_CYCLES 20000u /* 20 s: a run that takes longer is stuck */
+#define LSM_CONTOUR_SAMPLE_EVERY 32u  /* sampled setpoints: cycles 0, 32, 64, ... and the last one */
 #define LSM_CONTOUR_MAX_SAMPLES 256u
 #define LSM_CONTOUR_HASH_INIT 0x811C9DC5u
 
 /* One program item: a line or an arc (G17 plane, helical when Z changes) from the end of the previous one. */
 typedef struct lsm_contour_item {
-    uint8_t arc;         /* 0: G1 line, 1: arc */
-    int8_t dir;          /* arcs: +1 G3 (counter-clockwise), -1 G2 */
-    lsm_real end[3];     /* X Y Z (mm) */
-    lsm_real centre[3];  /* arcs: centre (X Y; Z ignored) */
+    uint8_t arc;        /* 0: G1 line, 1: arc */
+    int8_t dir;         /* arcs: +1 G3 (counter-clockwise), -1 G2 */
+    lsm_real end[3];    /* X Y Z (mm) */
+    lsm_real centre[3]; /* arcs: centre (X Y; Z ignored) */
     lsm_real feed_mm_s;
-    lsm_real tol_mm;     /* corner at the end of this item: > 0 blends (clothoids), 0 stops */
+    lsm_real tol_mm; /* corner at the end of this item: > 0 blends (clothoids), 0 stops */
 } lsm_contour_item;
 
 /* Number of items of the program, and item k (0 <= k < n). The end of the last item is the program's end. */
@@ -63,19 +63,19 @@ typedef struct lsm_contour {
     lsm_planner pl;
     lsm_interp ip;
     lsm_pblock blk[LSM_CONTOUR_BLOCKS];
-    uint32_t next_item;        /* next item to append */
-    uint8_t finished;          /* lsm_planner_finish accepted */
-    uint8_t result;            /* lsm_contour_result */
+    uint32_t next_item; /* next item to append */
+    uint8_t finished;   /* lsm_planner_finish accepted */
+    uint8_t result;     /* lsm_contour_result */
     uint8_t reserved[2];
-    lsm_status err;            /* first error (LSM_OK if none) */
-    uint32_t err_item;         /* ... at this item */
-    uint32_t cycles;           /* cycles stepped */
-    uint32_t appends;          /* items accepted */
-    uint32_t full_retries;     /* appends that returned LSM_E_FULL (retried the next cycle) */
-    uint32_t hash;             /* FNV-1a over the bit patterns of every setpoint (all LSM_MAX_AXES axes) */
-    uint32_t kind_cycles[4];   /* cycles whose cursor ended on: [1] line, [2] arc, [3] clothoid ([0] none) */
-    lsm_real pos[LSM_MAX_AXES];/* last setpoint */
-    lsm_real feed_max_mm_s;    /* highest path feed seen */
+    lsm_status err;             /* first error (LSM_OK if none) */
+    uint32_t err_item;          /* ... at this item */
+    uint32_t cycles;            /* cycles stepped */
+    uint32_t appends;           /* items accepted */
+    uint32_t full_retries;      /* appends that returned LSM_E_FULL (retried the next cycle) */
+    uint32_t hash;              /* FNV-1a over the bit patterns of every setpoint (all LSM_MAX_AXES axes) */
+    uint32_t kind_cycles[4];    /* cycles whose cursor ended on: [1] line, [2] arc, [3] clothoid ([0] none) */
+    lsm_real pos[LSM_MAX_AXES]; /* last setpoint */
+    lsm_real feed_max_mm_s;     /* highest path feed seen */
     lsm_contour_sample sample[LSM_CONTOUR_MAX_SAMPLES];
     uint32_t n_samples;
 } lsm_contour;

@@ -33,13 +33,13 @@
 #include "slcan.h"
 
 #ifndef CTL_TXQ
-#define CTL_TXQ 64u                   /* node TX queue (frames): TPDOs, EMCY, heartbeat, SDO answers of one tick */
+#define CTL_TXQ 64u /* node TX queue (frames): TPDOs, EMCY, heartbeat, SDO answers of one tick */
 #endif
 #ifndef CTL_PATH_SLOTS
-#define CTL_PATH_SLOTS 64u            /* co_path buffer (blocks, 0x5007) */
+#define CTL_PATH_SLOTS 64u /* co_path buffer (blocks, 0x5007) */
 #endif
 #ifndef CTL_RX_CHARS_PER_TICK
-#define CTL_RX_CHARS_PER_TICK 512u    /* bound of the tick's slcan parsing: ~20 frame lines, ~30 k instructions */
+#define CTL_RX_CHARS_PER_TICK 512u /* bound of the tick's slcan parsing: ~20 frame lines, ~30 k instructions */
 #endif
 
 /* The board's character link (a UART). getc: next received character or -1; write: queues all n characters or
@@ -52,23 +52,23 @@ typedef struct ctl_link {
 } ctl_link;
 
 typedef struct ctl_app_config {
-    uint8_t node_id;           /* 1..127 */
-    uint8_t n_axes;            /* 1..LSM_MAX_AXES */
-    uint32_t cycle_us;         /* control cycle, 100..100000 */
-    uint16_t heartbeat_ms;     /* 0x1017 default */
-    const char *device_name;   /* 0x1008 */
-    ctl_motion *motion;        /* the motion layer's state (ctl_motion.h), caller-owned */
+    uint8_t node_id;         /* 1..127 */
+    uint8_t n_axes;          /* 1..LSM_MAX_AXES */
+    uint32_t cycle_us;       /* control cycle, 100..100000 */
+    uint16_t heartbeat_ms;   /* 0x1017 default */
+    const char *device_name; /* 0x1008 */
+    ctl_motion *motion;      /* the motion layer's state (ctl_motion.h), caller-owned */
     ctl_link link;
 } ctl_app_config;
 
 typedef struct ctl_app_counters {
-    uint32_t cycles;           /* ticks run */
-    uint32_t frames_in;        /* frames from the host served by the node */
-    uint32_t frames_refused;   /* ... that lsm_canopen_rx refused (malformed, wrong NMT state) */
-    uint32_t frames_out;       /* frames sent up the link */
-    uint32_t frames_closed;    /* frames dropped while the channel was closed */
-    uint32_t link_waits;       /* ticks that left a frame waiting for room on the link */
-    uint32_t replies_lost;     /* command replies that found no room on the link */
+    uint32_t cycles;         /* ticks run */
+    uint32_t frames_in;      /* frames from the host served by the node */
+    uint32_t frames_refused; /* ... that lsm_canopen_rx refused (malformed, wrong NMT state) */
+    uint32_t frames_out;     /* frames sent up the link */
+    uint32_t frames_closed;  /* frames dropped while the channel was closed */
+    uint32_t link_waits;     /* ticks that left a frame waiting for room on the link */
+    uint32_t replies_lost;   /* command replies that found no room on the link */
 } ctl_app_counters;
 
 typedef struct ctl_app {
@@ -80,7 +80,7 @@ typedef struct ctl_app {
     ctl_link link;
     uint32_t cycle_us;
     uint32_t now_us;
-    lsm_can_frame pending;     /* a frame taken from the node that waits for room on the link */
+    lsm_can_frame pending; /* a frame taken from the node that waits for room on the link */
     bool have_pending;
     ctl_app_counters n;
 } ctl_app;

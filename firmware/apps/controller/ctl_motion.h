@@ -33,8 +33,8 @@
 typedef struct ctl_motion ctl_motion;
 
 typedef struct ctl_motion_config {
-    uint8_t n_axes;     /* as the node's, 1..LSM_MAX_AXES */
-    lsm_real cycle_s;   /* control cycle, > 0 */
+    uint8_t n_axes;   /* as the node's, 1..LSM_MAX_AXES */
+    lsm_real cycle_s; /* control cycle, > 0 */
 } ctl_motion_config;
 
 /* Errors: LSM_E_NULL, LSM_E_ARG (axes, cycle), the layer's own. Main loop, before the tick. */

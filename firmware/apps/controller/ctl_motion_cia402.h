@@ -13,7 +13,7 @@
 #include "motion.h"
 
 #ifndef CTL_LOOKAHEAD_BLOCKS
-#define CTL_LOOKAHEAD_BLOCKS 64u  /* as lissom-node's default (--lookahead): 5.9 KB of planner blocks */
+#define CTL_LOOKAHEAD_BLOCKS 64u /* as lissom-node's default (--lookahead): 5.9 KB of planner blocks */
 #endif
 
 struct ctl_motion {

@@ -9,8 +9,8 @@
 
 struct ctl_motion {
     uint8_t n_axes;
-    int32_t demand[LSM_MAX_AXES];    /* counts, held */
-    uint32_t refused[LSM_MAX_AXES];  /* set-points refused per axis */
+    int32_t demand[LSM_MAX_AXES];   /* counts, held */
+    uint32_t refused[LSM_MAX_AXES]; /* set-points refused per axis */
     uint32_t blocks_refused;
 };
 

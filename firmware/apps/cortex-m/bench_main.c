@@ -145,10 +145,10 @@ typedef struct sc_case {
 } sc_case;
 
 static const sc_case k_sc_cases[8] = {
-    {0.0f, 100.0f, 1000.0f, 20000.0f, 1.0e6f},   {100.0f, 30.0f, 500.0f, 10000.0f, 5.0e5f},
-    {30.0f, 0.0f, 2000.0f, 1.0e5f, 1.0e7f},      {0.0f, 5.0f, 3000.0f, 5.0e4f, 2.0e6f},
-    {12.5f, 250.0f, 4000.0f, 8.0e4f, 4.0e6f},    {250.0f, 0.0f, 1500.0f, 3.0e4f, 1.0e6f},
-    {0.0f, 1000.0f, 10000.0f, 2.0e5f, 2.0e7f},   {60.0f, 61.0f, 1000.0f, 20000.0f, 1.0e6f},
+    {0.0f, 100.0f, 1000.0f, 20000.0f, 1.0e6f}, {100.0f, 30.0f, 500.0f, 10000.0f, 5.0e5f},
+    {30.0f, 0.0f, 2000.0f, 1.0e5f, 1.0e7f},    {0.0f, 5.0f, 3000.0f, 5.0e4f, 2.0e6f},
+    {12.5f, 250.0f, 4000.0f, 8.0e4f, 4.0e6f},  {250.0f, 0.0f, 1500.0f, 3.0e4f, 1.0e6f},
+    {0.0f, 1000.0f, 10000.0f, 2.0e5f, 2.0e7f}, {60.0f, 61.0f, 1000.0f, 20000.0f, 1.0e6f},
 };
 
 static lsm_scurve g_sc;
@@ -424,8 +424,8 @@ int main(void)
         out_bench("scurve_eval_closed_form", insns_x100(run_counts(call_scurve_eval, NULL, n), n), "call", n, -1);
     }
 
-    out_bench("scurve_strict_intervals", insns_x100(run_counts(call_scurve_strict_intervals, NULL, 800u), 800u),
-              "call", 800u, -1);
+    out_bench("scurve_strict_intervals", insns_x100(run_counts(call_scurve_strict_intervals, NULL, 800u), 800u), "call",
+              800u, -1);
     out_bench("libm_sinf", insns_x100(run_counts(call_sinf, NULL, 1024u), 1024u), "call", 1024u, -1);
     out_bench("libm_cbrtf", insns_x100(run_counts(call_cbrtf, NULL, 1024u), 1024u), "call", 1024u, -1);
     out_bench("libm_sqrtf", insns_x100(run_counts(call_sqrtf, NULL, 1024u), 1024u), "call", 1024u, -1);

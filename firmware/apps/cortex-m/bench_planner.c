@@ -150,8 +150,7 @@ void __real_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_k
                               lsm_kin *out);
 void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
                               lsm_kin *out);
-void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
-                              lsm_kin *out)
+void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out)
 {
     if (!g_w_ramp_on) {
         __real_lsm_phase_advance(ph, cycle_s, start, tau_s, out);
@@ -174,9 +173,9 @@ typedef struct bitem {
 } bitem;
 
 typedef struct gen {
-    uint32_t k;          /* next item */
-    lsm_real p[3];       /* end of the previous item */
-    lsm_real h;          /* heading (dense program) */
+    uint32_t k;    /* next item */
+    lsm_real p[3]; /* end of the previous item */
+    lsm_real h;    /* heading (dense program) */
 } gen;
 
 typedef bool (*gen_fn)(gen *g, bitem *it);
@@ -216,8 +215,8 @@ static bool gen_line1(gen *g, bitem *it)
 static bool gen_line6(gen *g, bitem *it)
 {
     static const float k_p[6][LSM_MAX_AXES] = {
-        {20.0f, 5.0f, -2.0f, 0.5f, -0.2f, 1.0f},  {35.0f, 20.0f, -4.0f, 0.8f, 0.1f, 2.5f},
-        {10.0f, 30.0f, -1.0f, 0.2f, 0.3f, 3.0f},  {-5.0f, 10.0f, 0.0f, -0.4f, 0.0f, 1.5f},
+        {20.0f, 5.0f, -2.0f, 0.5f, -0.2f, 1.0f},   {35.0f, 20.0f, -4.0f, 0.8f, 0.1f, 2.5f},
+        {10.0f, 30.0f, -1.0f, 0.2f, 0.3f, 3.0f},   {-5.0f, 10.0f, 0.0f, -0.4f, 0.0f, 1.5f},
         {15.0f, -10.0f, -3.0f, 0.0f, -0.3f, 0.5f}, {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f},
     };
     if (g->k >= 12u)
@@ -381,8 +380,7 @@ static int32_t max_insns(uint32_t counts, uint32_t ovh_x100)
     return (int32_t)(counts * 40u) - (int32_t)(ovh_x100 / 100u);
 }
 
-static void out_line(const char *name, uint32_t x100, const char *unit, uint32_t calls, int32_t max,
-                     const char *extra)
+static void out_line(const char *name, uint32_t x100, const char *unit, uint32_t calls, int32_t max, const char *extra)
 {
     cm_out_str("bench ");
     cm_out_str(name);
@@ -415,8 +413,8 @@ static void out_kind(const char *kind, unsigned n_axes, const kstat *k)
     *p++ = 'a';
     *p++ = 'x';
     *p = '\0';
-    out_line(name, mean_x100(k->counts, k->n, g_step_ovh_x100), "cycle", k->n, max_insns(k->max_counts, g_step_ovh_x100),
-             k->n > k->n_noplan ? "max_at=piece_planned" : "max_at=no_plan");
+    out_line(name, mean_x100(k->counts, k->n, g_step_ovh_x100), "cycle", k->n,
+             max_insns(k->max_counts, g_step_ovh_x100), k->n > k->n_noplan ? "max_at=piece_planned" : "max_at=no_plan");
     const char *suffix = "_noplan";
     for (const char *s = suffix; *s != '\0'; s++)
         *p++ = *s;
@@ -434,7 +432,7 @@ typedef struct astat {
     uint64_t counts, corner_counts, fit_counts, size_counts, phase_counts;
     uint32_t max_counts, max_corner, max_fit;
     uint32_t bp_nodes, checks;
-    uint64_t cat_counts[3];    /* per kind of item: dense polyline point, zigzag line, arc or line after it */
+    uint64_t cat_counts[3]; /* per kind of item: dense polyline point, zigzag line, arc or line after it */
     uint32_t cat_n[3], cat_max[3];
     uint32_t full_pass_counts; /* one full backward pass over a full buffer */
     uint32_t full_pass_blocks;

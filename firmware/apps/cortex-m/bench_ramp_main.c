@@ -16,7 +16,8 @@ int main(void)
     CM_SYST_RVR = CM_SYST_MAX_RELOAD;
     CM_SYST_CVR = 0u;
     CM_SYST_CSR = CM_SYST_CSR_ENABLE | CM_SYST_CSR_CLKSOURCE; /* free running, no interrupt */
-    cm_out_str("lissom-bench-ramp: the planner's ramp work inside appends, -icount shift=0, instructions = 40 x SysTick\n");
+    cm_out_str(
+        "lissom-bench-ramp: the planner's ramp work inside appends, -icount shift=0, instructions = 40 x SysTick\n");
     const bool ok = bench_planner_append();
     cm_out_str(ok ? "bench PASS\n" : "bench FAIL\n");
     return ok ? 0 : 1;

@@ -42,12 +42,12 @@
 #ifndef CTL_ICOUNT_SHIFT
 #define CTL_ICOUNT_SHIFT 3
 #endif
-#define CTL_CORE_MHZ 168u                          /* modelled core clock, one instruction per cycle */
-#define CTL_CYCLE_US 1000u                         /* control cycle */
-#define CTL_TICK_INSTR (CTL_CORE_MHZ * CTL_CYCLE_US) /* instructions per tick: 168,000 */
+#define CTL_CORE_MHZ 168u                             /* modelled core clock, one instruction per cycle */
+#define CTL_CYCLE_US 1000u                            /* control cycle */
+#define CTL_TICK_INSTR (CTL_CORE_MHZ * CTL_CYCLE_US)  /* instructions per tick: 168,000 */
 #define CTL_INSTR_PER_COUNT (40u >> CTL_ICOUNT_SHIFT) /* SysTick count = 40 ns of virtual time */
 #define CTL_TICK_COUNTS (CTL_TICK_INSTR / CTL_INSTR_PER_COUNT)
-#define CTL_LOAD_WINDOW_TICKS 1000u                /* background load window: 1 s */
+#define CTL_LOAD_WINDOW_TICKS 1000u /* background load window: 1 s */
 
 _Static_assert(CTL_ICOUNT_SHIFT <= 3, "a SysTick count must be a whole number of instructions");
 _Static_assert(CTL_TICK_INSTR % CTL_INSTR_PER_COUNT == 0u, "the tick must be a whole number of SysTick counts");

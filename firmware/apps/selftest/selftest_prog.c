@@ -17,12 +17,9 @@ typedef struct sc_case {
 } sc_case;
 
 static const sc_case k_sc_cases[] = {
-    {0.0f, 100.0f, 1000.0f, 20000.0f, 1.0e6f},
-    {100.0f, 30.0f, 500.0f, 10000.0f, 5.0e5f},
-    {30.0f, 0.0f, 2000.0f, 1.0e5f, 1.0e7f},
-    {0.0f, 5.0f, 3000.0f, 5.0e4f, 2.0e6f},
-    {12.5f, 250.0f, 4000.0f, 8.0e4f, 4.0e6f},
-    {1.0f, 2.0f, -1.0f, 1.0f, 1.0f},
+    {0.0f, 100.0f, 1000.0f, 20000.0f, 1.0e6f}, {100.0f, 30.0f, 500.0f, 10000.0f, 5.0e5f},
+    {30.0f, 0.0f, 2000.0f, 1.0e5f, 1.0e7f},    {0.0f, 5.0f, 3000.0f, 5.0e4f, 2.0e6f},
+    {12.5f, 250.0f, 4000.0f, 8.0e4f, 4.0e6f},  {1.0f, 2.0f, -1.0f, 1.0f, 1.0f},
 };
 #define N_SC_CASES ((uint32_t)(sizeof k_sc_cases / sizeof k_sc_cases[0]))
 

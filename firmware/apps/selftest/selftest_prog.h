@@ -31,18 +31,18 @@
 #include "scurve.h"
 #include "stepgen.h"
 
-#define LSM_SELFTEST_CYCLE_US 250u      /* control cycle of the program (us); the MCU tick runs at it */
+#define LSM_SELFTEST_CYCLE_US 250u /* control cycle of the program (us); the MCU tick runs at it */
 #define LSM_SELFTEST_MAX_PARTS 4
 #define LSM_SELFTEST_MAX_SAMPLES 512
-#define LSM_SELFTEST_SAMPLE_EVERY 97u   /* sample cycles 0, 97, 194, ... of each item */
+#define LSM_SELFTEST_SAMPLE_EVERY 97u /* sample cycles 0, 97, 194, ... of each item */
 #define LSM_SELFTEST_HASH_INIT 0x811C9DC5u
 
 typedef struct lsm_selftest_part {
     const char *name;
-    uint32_t n_plans;      /* items planned (successfully or not) */
-    uint32_t n_cycles;     /* cycles evaluated */
-    uint32_t plan_hash;    /* plan side: statuses, cycle counts, peak jerks */
-    uint32_t cycle_hash;   /* tick side: every setpoint's bit pattern */
+    uint32_t n_plans;    /* items planned (successfully or not) */
+    uint32_t n_cycles;   /* cycles evaluated */
+    uint32_t plan_hash;  /* plan side: statuses, cycle counts, peak jerks */
+    uint32_t cycle_hash; /* tick side: every setpoint's bit pattern */
 } lsm_selftest_part;
 
 /* One sampled setpoint: up to 4 values (scurve: j, a, v, s; move: the axis position in v[0]). */
@@ -54,10 +54,10 @@ typedef struct lsm_selftest_sample {
 } lsm_selftest_sample;
 
 typedef struct lsm_selftest_slot {
-    volatile uint8_t full;   /* 0: the planner may fill it; 1: the tick owns it */
+    volatile uint8_t full; /* 0: the planner may fill it; 1: the tick owns it */
     uint8_t part;
     uint16_t item;
-    uint32_t n_cycles;       /* cycles to evaluate */
+    uint32_t n_cycles; /* cycles to evaluate */
     lsm_scurve sc;
     lsm_move mv;
     lsm_stepgen gen;
@@ -75,20 +75,20 @@ typedef struct lsm_selftest {
     lsm_selftest_part result[LSM_SELFTEST_MAX_PARTS];
     uint32_t n_parts;
     lsm_selftest_sample sample[LSM_SELFTEST_MAX_SAMPLES];
-    uint32_t n_samples;      /* recorded (at most LSM_SELFTEST_MAX_SAMPLES) */
-    uint32_t samples_lost;   /* not recorded because the table was full */
+    uint32_t n_samples;    /* recorded (at most LSM_SELFTEST_MAX_SAMPLES) */
+    uint32_t samples_lost; /* not recorded because the table was full */
 } lsm_selftest;
 
 typedef enum lsm_selftest_plan_result {
-    LSM_SELFTEST_PLANNED = 0,      /* planned one item (or hashed a rejected one): call again */
-    LSM_SELFTEST_SLOTS_BUSY = 1,   /* both slots are in use: wait for a tick */
-    LSM_SELFTEST_ALL_PLANNED = 2   /* nothing left to plan */
+    LSM_SELFTEST_PLANNED = 0,    /* planned one item (or hashed a rejected one): call again */
+    LSM_SELFTEST_SLOTS_BUSY = 1, /* both slots are in use: wait for a tick */
+    LSM_SELFTEST_ALL_PLANNED = 2 /* nothing left to plan */
 } lsm_selftest_plan_result;
 
 typedef enum lsm_selftest_tick_result {
-    LSM_SELFTEST_CYCLE = 0,   /* evaluated one cycle */
-    LSM_SELFTEST_IDLE = 1,    /* no plan ready (counted in idle_ticks) */
-    LSM_SELFTEST_DONE = 2     /* the program has finished */
+    LSM_SELFTEST_CYCLE = 0, /* evaluated one cycle */
+    LSM_SELFTEST_IDLE = 1,  /* no plan ready (counted in idle_ticks) */
+    LSM_SELFTEST_DONE = 2   /* the program has finished */
 } lsm_selftest_tick_result;
 
 /* Resets the program to its start. */

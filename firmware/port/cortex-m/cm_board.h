@@ -25,26 +25,26 @@
 
 #define CM_REG32(addr) (*(volatile uint32_t *)(uintptr_t)(addr))
 
-#define CM_SYSCLK_HZ 25000000u          /* processor and APB clock of mps2-an386 */
-#define CM_SYSCLK_PER_US 25u            /* CM_SYSCLK_HZ / 1e6 */
+#define CM_SYSCLK_HZ 25000000u /* processor and APB clock of mps2-an386 */
+#define CM_SYSCLK_PER_US 25u   /* CM_SYSCLK_HZ / 1e6 */
 
 /* System control space (ARMv7-M architecture reference manual, B3) */
-#define CM_SYST_CSR CM_REG32(0xE000E010u)   /* SysTick control and status */
-#define CM_SYST_RVR CM_REG32(0xE000E014u)   /* SysTick reload value (24 bit) */
-#define CM_SYST_CVR CM_REG32(0xE000E018u)   /* SysTick current value (24-bit down-counter) */
+#define CM_SYST_CSR CM_REG32(0xE000E010u) /* SysTick control and status */
+#define CM_SYST_RVR CM_REG32(0xE000E014u) /* SysTick reload value (24 bit) */
+#define CM_SYST_CVR CM_REG32(0xE000E018u) /* SysTick current value (24-bit down-counter) */
 #define CM_SYST_CSR_ENABLE 0x1u
 #define CM_SYST_CSR_TICKINT 0x2u
-#define CM_SYST_CSR_CLKSOURCE 0x4u          /* 1 = processor clock */
+#define CM_SYST_CSR_CLKSOURCE 0x4u /* 1 = processor clock */
 #define CM_SYST_MAX_RELOAD 0x00FFFFFFu
-#define CM_SCB_ICSR CM_REG32(0xE000ED04u)   /* interrupt control and state */
+#define CM_SCB_ICSR CM_REG32(0xE000ED04u) /* interrupt control and state */
 #define CM_SCB_ICSR_PENDSTSET (1u << 26)
 #define CM_SCB_ICSR_PENDSTCLR (1u << 25)
-#define CM_SCB_SHPR3 CM_REG32(0xE000ED20u)  /* priorities of PendSV (23:16) and SysTick (31:24) */
-#define CM_SCB_CFSR CM_REG32(0xE000ED28u)   /* configurable fault status */
-#define CM_SCB_HFSR CM_REG32(0xE000ED2Cu)   /* hard fault status */
+#define CM_SCB_SHPR3 CM_REG32(0xE000ED20u) /* priorities of PendSV (23:16) and SysTick (31:24) */
+#define CM_SCB_CFSR CM_REG32(0xE000ED28u)  /* configurable fault status */
+#define CM_SCB_HFSR CM_REG32(0xE000ED2Cu)  /* hard fault status */
 #define CM_SCB_MMFAR CM_REG32(0xE000ED34u)
 #define CM_SCB_BFAR CM_REG32(0xE000ED38u)
-#define CM_SCB_CPACR CM_REG32(0xE000ED88u)  /* coprocessor access (CP10/CP11 = FPU) */
+#define CM_SCB_CPACR CM_REG32(0xE000ED88u) /* coprocessor access (CP10/CP11 = FPU) */
 
 /* CMSDK APB timer 0 */
 #define CM_TIMER0_CTRL CM_REG32(0x40000000u)
@@ -55,10 +55,10 @@
 /* CMSDK APB UART 0 (0x40004000): RX interrupt = IRQ 0, TX interrupt = IRQ 1 (QEMU hw/arm/mps2.c); QEMU's
  * first -serial is this UART. One-byte holding registers, no FIFO. */
 #define CM_UART0_DATA CM_REG32(0x40004000u)
-#define CM_UART0_STATE CM_REG32(0x40004004u)      /* bit 0 TX full, bit 1 RX full, bit 2/3 TX/RX overrun */
-#define CM_UART0_CTRL CM_REG32(0x40004008u)       /* bit 0 TX enable, 1 RX enable, 2 TX int, 3 RX int */
-#define CM_UART0_INTSTATUS CM_REG32(0x4000400Cu)  /* read: bit 0 TX, bit 1 RX; write 1 to clear */
-#define CM_UART0_BAUDDIV CM_REG32(0x40004010u)    /* >= 16 (QEMU refuses smaller dividers) */
+#define CM_UART0_STATE CM_REG32(0x40004004u)     /* bit 0 TX full, bit 1 RX full, bit 2/3 TX/RX overrun */
+#define CM_UART0_CTRL CM_REG32(0x40004008u)      /* bit 0 TX enable, 1 RX enable, 2 TX int, 3 RX int */
+#define CM_UART0_INTSTATUS CM_REG32(0x4000400Cu) /* read: bit 0 TX, bit 1 RX; write 1 to clear */
+#define CM_UART0_BAUDDIV CM_REG32(0x40004010u)   /* >= 16 (QEMU refuses smaller dividers) */
 #define CM_UART_STATE_TXFULL 0x1u
 #define CM_UART_STATE_RXFULL 0x2u
 #define CM_UART_STATE_OVERRUNS 0xCu

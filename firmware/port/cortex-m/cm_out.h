@@ -11,10 +11,10 @@
 
 void cm_out_char(char c);
 void cm_out_str(const char *s);
-void cm_out_u32(uint32_t v);                  /* decimal, no padding */
-void cm_out_i32(int32_t v);                   /* decimal with '-' for negatives */
-void cm_out_hex32(uint32_t v);                /* "0x" and exactly 8 lower-case hex digits */
+void cm_out_u32(uint32_t v);                        /* decimal, no padding */
+void cm_out_i32(int32_t v);                         /* decimal with '-' for negatives */
+void cm_out_hex32(uint32_t v);                      /* "0x" and exactly 8 lower-case hex digits */
 void cm_out_fixed(int32_t v, unsigned frac_digits); /* v / 10^frac_digits, e.g. (12345, 2) -> "123.45" */
-void cm_out_flush(void);                      /* write out a partial line */
+void cm_out_flush(void);                            /* write out a partial line */
 
 #endif /* CM_OUT_H */

@@ -11,9 +11,9 @@
 
 static struct {
     uint8_t rx[CM_UART_RX_RING];
-    volatile uint32_t rx_head, rx_tail;  /* head: RX interrupt; tail: consumer */
+    volatile uint32_t rx_head, rx_tail; /* head: RX interrupt; tail: consumer */
     uint8_t tx[CM_UART_TX_RING];
-    volatile uint32_t tx_head, tx_tail;  /* head: producer; tail: TX interrupt */
+    volatile uint32_t tx_head, tx_tail; /* head: producer; tail: TX interrupt */
     volatile uint32_t rx_chars, rx_dropped, tx_chars, tx_refused;
 } g_uart;
 

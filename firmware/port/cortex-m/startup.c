@@ -93,13 +93,16 @@ __attribute__((section(".isr_vector"), used)) const cm_vector cm_vectors[16 + CM
     Default_Handler,                /* 4: MemManage */
     Default_Handler,                /* 5: BusFault */
     Default_Handler,                /* 6: UsageFault */
-    0, 0, 0, 0,                     /* 7-10: reserved */
-    Default_Handler,                /* 11: SVCall */
-    Default_Handler,                /* 12: DebugMonitor */
-    0,                              /* 13: reserved */
-    Default_Handler,                /* 14: PendSV */
-    SysTick_Handler,                /* 15: SysTick (port_mps2.c) */
-    UART0RX_Handler,                /* IRQ 0: UART 0 RX (cm_uart.c) */
-    UART0TX_Handler,                /* IRQ 1: UART 0 TX */
+    0,
+    0,
+    0,
+    0,               /* 7-10: reserved */
+    Default_Handler, /* 11: SVCall */
+    Default_Handler, /* 12: DebugMonitor */
+    0,               /* 13: reserved */
+    Default_Handler, /* 14: PendSV */
+    SysTick_Handler, /* 15: SysTick (port_mps2.c) */
+    UART0RX_Handler, /* IRQ 0: UART 0 RX (cm_uart.c) */
+    UART0TX_Handler, /* IRQ 1: UART 0 TX */
     [16 + 2 ... 16 + CM_N_IRQ - 1] = Default_Handler,
 };

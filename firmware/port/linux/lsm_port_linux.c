@@ -30,7 +30,7 @@ typedef struct port_state {
     int can_fd, timer_fd, wake_fd;
     struct gpiod_chip *chip;
     struct gpiod_line *estop, *enable, *inpos;
-    bool estop_broken;            /* an E-stop line was configured but cannot be used: reads active */
+    bool estop_broken; /* an E-stop line was configured but cannot be used: reads active */
     struct timespec t0;
     lsm_port_tick_fn tick_fn;
     void *tick_ctx;

@@ -28,30 +28,30 @@
 #include "lsm_port.h"
 
 typedef struct lsm_port_linux_config {
-    const char *can_ifname;   /* SocketCAN interface, e.g. "vcan0"; NULL = no CAN (send/recv: LSM_E_STATE) */
-    const char *gpio_chip;    /* libgpiod chip: "gpiochip0", "/dev/gpiochip0", a label or a number; NULL = no GPIO */
-    int estop_line;           /* line offsets on that chip, -1 = not used */
+    const char *can_ifname; /* SocketCAN interface, e.g. "vcan0"; NULL = no CAN (send/recv: LSM_E_STATE) */
+    const char *gpio_chip;  /* libgpiod chip: "gpiochip0", "/dev/gpiochip0", a label or a number; NULL = no GPIO */
+    int estop_line;         /* line offsets on that chip, -1 = not used */
     int enable_line;
     int inpos_line;
-    bool estop_active_low;    /* E-stop: physical 0 means "stop requested" (default: physical 1 means stop) */
-    int estop_bias;           /* 0 as is, 1 pull-up, 2 pull-down, 3 bias disabled */
-    bool outputs_active_low;  /* drive-enable / in-position: physical 0 means "on" */
-    const char *consumer;     /* libgpiod consumer label, NULL = "lissom-node" */
+    bool estop_active_low;   /* E-stop: physical 0 means "stop requested" (default: physical 1 means stop) */
+    int estop_bias;          /* 0 as is, 1 pull-up, 2 pull-down, 3 bias disabled */
+    bool outputs_active_low; /* drive-enable / in-position: physical 0 means "on" */
+    const char *consumer;    /* libgpiod consumer label, NULL = "lissom-node" */
 } lsm_port_linux_config;
 
 /* What the CAN controller reported (from error frames) or the socket noticed. */
 typedef enum lsm_port_bus_event {
-    LSM_PORT_BUS_ERROR_ACTIVE = 0,   /* back to error active (CAN_ERR_CRTL_ACTIVE) */
-    LSM_PORT_BUS_ERROR_PASSIVE = 1,  /* RX or TX error passive (CAN_ERR_CRTL_RX/TX_PASSIVE) */
-    LSM_PORT_BUS_OFF = 2,            /* CAN_ERR_BUSOFF */
-    LSM_PORT_BUS_RESTARTED = 3,      /* CAN_ERR_RESTARTED: the controller left bus-off */
-    LSM_PORT_BUS_RX_OVERRUN = 4      /* controller RX overflow, or frames dropped by the socket queue */
+    LSM_PORT_BUS_ERROR_ACTIVE = 0,  /* back to error active (CAN_ERR_CRTL_ACTIVE) */
+    LSM_PORT_BUS_ERROR_PASSIVE = 1, /* RX or TX error passive (CAN_ERR_CRTL_RX/TX_PASSIVE) */
+    LSM_PORT_BUS_OFF = 2,           /* CAN_ERR_BUSOFF */
+    LSM_PORT_BUS_RESTARTED = 3,     /* CAN_ERR_RESTARTED: the controller left bus-off */
+    LSM_PORT_BUS_RX_OVERRUN = 4     /* controller RX overflow, or frames dropped by the socket queue */
 } lsm_port_bus_event;
 
 /* Counters since lsm_port_init. */
 typedef struct lsm_port_linux_stats {
     uint32_t rx_frames, tx_frames, tx_full, tx_errors, error_frames, rx_dropped, ticks, overruns;
-    uint32_t tick_max_us;            /* longest tick function run */
+    uint32_t tick_max_us; /* longest tick function run */
 } lsm_port_linux_stats;
 
 /* Sets what lsm_port_init opens. Copies the struct (the strings must outlive the port). Errors: LSM_E_NULL,

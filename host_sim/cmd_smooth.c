@@ -27,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "arc_centre.h"
 #include "cli.h"
 #include "commands.h"
 #include "corner.h"
@@ -139,19 +140,6 @@ static void sm_eval(const lsm_geom *g, double s, double pos[LSM_MAX_AXES], doubl
     }
 }
 
-/* The centre of an arc in double (geom.h: the float build stores the start point; its centre is computed here
- * in double from the stored start, radius and phi0, so that distances are not limited by a float centre). */
-static void sm_arc_centre(const lsm_geom_arc *a, double c[3])
-{
-#if LSM_REAL_IS_FLOAT
-    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
-    for (int i = 0; i < 3; i++)
-        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
-#else
-    for (int i = 0; i < 3; i++)
-        c[i] = a->centre_mm[i];
-#endif
-}
 
 static double sm_dist_block(const lsm_geom *g, const double p[3])
 {
@@ -176,7 +164,7 @@ static double sm_dist_block(const lsm_geom *g, const double p[3])
     double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                    a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
     double u = 0.0, v = 0.0, h = 0.0, ac[3];
-    sm_arc_centre(a, ac);
+    sim_arc_centre_d(a, ac);
     for (int i = 0; i < 3; i++) {
         const double w = p[i] - ac[i];
         u += w * a->e1[i];

@@ -8,6 +8,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "arc_centre.h"
 #include "drive.h"
 #include "gcode.h"
 #include "geom.h"
@@ -223,19 +224,6 @@ static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
     return 0;
 }
 
-/* The centre of an arc in double (geom.h: the float build stores the start point; its centre is computed here
- * in double from the stored start, radius and phi0, so that distances are not limited by a float centre). */
-static void sim_arc_centre(const lsm_geom_arc *a, double c[3])
-{
-#if LSM_REAL_IS_FLOAT
-    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
-    for (int i = 0; i < 3; i++)
-        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
-#else
-    for (int i = 0; i < 3; i++)
-        c[i] = a->centre_mm[i];
-#endif
-}
 
 /* Distance (X Y Z) from x to one path element. */
 static double dist_elem(const lsm_geom *g, const double x[3])
@@ -258,7 +246,7 @@ static double dist_elem(const lsm_geom *g, const double x[3])
     double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
                    a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
     double ac[3];
-    sim_arc_centre(a, ac);
+    sim_arc_centre_d(a, ac);
     double d[3] = {x[0] - ac[0], x[1] - ac[1], x[2] - ac[2]};
     const double u = d[0] * a->e1[0] + d[1] * a->e1[1] + d[2] * a->e1[2];
     const double w = d[0] * a->e2[0] + d[1] * a->e2[1] + d[2] * a->e2[2];

@@ -8,19 +8,12 @@
 
 #include <math.h>
 
+#include "arc_centre.h" /* host_sim/: the centre in double, shared with the simulator */
 #include "geom.h"
 
 static inline void test_arc_centre(const lsm_geom *g, double c[3])
 {
-    const lsm_geom_arc *a = &g->u.arc;
-#if LSM_REAL_IS_FLOAT
-    const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
-    for (int i = 0; i < 3; i++)
-        c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
-#else
-    for (int i = 0; i < 3; i++)
-        c[i] = a->centre_mm[i];
-#endif
+    sim_arc_centre_d(&g->u.arc, c);
 }
 
 #endif

@@ -50,31 +50,7 @@ static double logu(double a, double b)
 
 /* ---- reference quadrature ---- */
 
-#define GL_N 12
-static long double g_x[GL_N], g_w[GL_N];
-
-static void gl_init(void)
-{
-    for (int i = 0; i < GL_N; i++) {
-        long double x = cosl(3.14159265358979323846264L * (i + 0.75L) / (GL_N + 0.5L));
-        long double dp = 0;
-        for (int it = 0; it < 100; it++) {
-            long double p0 = 1, p1 = x;
-            for (int k = 2; k <= GL_N; k++) {
-                long double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = GL_N * (x * p1 - p0) / (x * x - 1);
-            long double dx = p1 / dp;
-            x -= dx;
-            if (fabsl(dx) < 1e-19L)
-                break;
-        }
-        g_x[i] = x;
-        g_w[i] = 2 / ((1 - x * x) * dp * dp);
-    }
-}
+#include "lsm_test_quad.h" /* gl_init, g_x, g_w: the reference quadrature */
 
 /* int_a^b e^{i(th0 + k0 t + c t^2/2)} dt in long double (one Gauss-Legendre panel: b - a must be small) */
 static void ref_panel(double th0, double k0, double c, long double a, long double b, long double *X, long double *Y)

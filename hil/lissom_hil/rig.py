@@ -452,12 +452,14 @@ class Rig:
         """Position demand 0x6062 in counts from home."""
         return self.read(0x6062, axis=axis) - self.home[axis]
 
-    def wait_demand(self, axis, mm, timeout=5.0, poll=0.002):
+    def wait_demand(self, axis, mm, timeout=5.0, poll=0.002, direction=None):
         """Waits until the position demand 0x6062 has reached or passed `mm` (from home), in the direction from
         the demand at the call towards `mm` (an event of the motion, not a wall-clock delay). Returns the demand
         in counts from home."""
         goal = int(round(mm * self.cpm(axis)))
-        sign = 1 if goal >= self.demand(axis) else -1
+        # the direction of the move: given, or from the demand at the call (a fast node may already have passed
+        # `mm` when the first read arrives: give the direction then)
+        sign = direction if direction is not None else (1 if goal >= self.demand(axis) else -1)
         t_end = time.monotonic() + timeout
         while True:
             d = self.demand(axis)

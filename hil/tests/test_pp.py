@@ -109,12 +109,12 @@ def test_pp_setpoints(rig):
     # demand passing 27 mm (inside the acceleration ramp, which covers ~8 mm; bus latency may move it later):
     # a retarget at any cycle of the move must keep every limit (tests/motion/test_ppscan scans them all).
     rig.pp_move(0, 100.0, wait=False)
-    rig.wait_demand(0, 27.0)
+    rig.wait_demand(0, 27.0, direction=1)  # from 25 mm towards 100 mm
     rig.pp_move(0, 30.0)
     assert rig.demand(0) == int(30 * cpm)
     # halt (bit 8): jerk-limited stop with 0x6084, then the move resumes when halt is released
     rig.pp_move(0, 80.0, wait=False)
-    rig.wait_demand(0, 33.0)  # inside the acceleration ramp, as above
+    rig.wait_demand(0, 33.0, direction=1)  # from 30 mm towards 80 mm: inside the acceleration ramp, as above
     rig.controlword(0, 0x10F)
     rig.wait_sw(0, 0x0400, 0x0400, 5.0)  # target reached is also set when halted at rest
     held = rig.demand(0)

@@ -802,10 +802,8 @@ static void test_block_size(void **state)
 
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_seed = strtoul(argv[1], NULL, 10);
-    if (argc > 2)
-        g_count = strtol(argv[2], NULL, 10);
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
+    g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_block_size),  cmocka_unit_test(test_bad_blocks),
@@ -815,5 +813,5 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_underrun),    cmocka_unit_test(test_resume_after_underrun),
         cmocka_unit_test(test_no_prepare),  cmocka_unit_test(test_lead_cycles),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

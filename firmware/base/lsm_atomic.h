@@ -28,6 +28,28 @@ typedef _Atomic lsm_real lsm_atomic_real;
 /* Plain (relaxed) access to a shared field: no ordering, but no torn or undefined access. Any context. */
 #define lsm_atomic_get(p) atomic_load_explicit((p), memory_order_relaxed)
 #define lsm_atomic_put(p, v) atomic_store_explicit((p), (v), memory_order_relaxed)
+
+#if LSM_HANDOFF_SINGLE_CORE
+/* One core (lsm_config.h: the Cortex-M4F builds): the tick interrupts the background and never runs beside it, and
+ * a core sees its own stores in program order, so only the compiler must keep the order of the accesses: a signal
+ * fence, which emits no instruction (a DMB per release store cost the 3-axis cycle about 60 instructions). */
+#define LSM_COMPILER_FENCE() atomic_signal_fence(memory_order_seq_cst)
+#define lsm_atomic_get_acquire(p) lsm_fenced_get_u32(p)
+#define lsm_atomic_put_release(p, v)                           \
+    do {                                                       \
+        LSM_COMPILER_FENCE();                                  \
+        atomic_store_explicit((p), (v), memory_order_relaxed); \
+    } while (0)
+#define lsm_seq_put(p, v) atomic_store_explicit((p), (v), memory_order_relaxed)
+#define lsm_seq_get(p) atomic_load_explicit((p), memory_order_relaxed)
+static inline uint32_t lsm_fenced_get_u32(const lsm_atomic_u32 *p)
+{
+    const uint32_t v = atomic_load_explicit((lsm_atomic_u32 *)p, memory_order_relaxed);
+    LSM_COMPILER_FENCE();
+    return v;
+}
+#else
+#define LSM_COMPILER_FENCE() ((void)0)
 /* Publication of a single word: what the writer wrote before the release store is visible to the reader after
  * its acquire load of that word. */
 #define lsm_atomic_get_acquire(p) atomic_load_explicit((p), memory_order_acquire)
@@ -38,11 +60,13 @@ typedef _Atomic lsm_real lsm_atomic_real;
  * 2012, the variant with ordered data accesses). */
 #define lsm_seq_put(p, v) atomic_store_explicit((p), (v), memory_order_release)
 #define lsm_seq_get(p) atomic_load_explicit((p), memory_order_acquire)
+#endif
 
 /* Sequence lock, writer side (one writer context). Wait-free. */
 static inline void lsm_seq_write_begin(lsm_atomic_u32 *seq)
 {
     lsm_atomic_put(seq, lsm_atomic_get(seq) + 1u); /* odd: being written */
+    LSM_COMPILER_FENCE();
 }
 
 static inline void lsm_seq_write_end(lsm_atomic_u32 *seq)
@@ -54,11 +78,12 @@ static inline void lsm_seq_write_end(lsm_atomic_u32 *seq)
  * (the writer was active or wrote meanwhile): copy again. The fields are read with lsm_seq_get. */
 static inline uint32_t lsm_seq_read_begin(const lsm_atomic_u32 *seq)
 {
-    return atomic_load_explicit((lsm_atomic_u32 *)seq, memory_order_acquire);
+    return lsm_atomic_get_acquire((lsm_atomic_u32 *)seq);
 }
 
 static inline int lsm_seq_read_retry(const lsm_atomic_u32 *seq, uint32_t begin)
 {
+    LSM_COMPILER_FENCE();
     return (begin & 1u) != 0u || atomic_load_explicit((lsm_atomic_u32 *)seq, memory_order_relaxed) != begin;
 }
 

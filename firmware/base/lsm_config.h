@@ -43,6 +43,18 @@ typedef double lsm_real;
 
 /* ------------------------------------------------------------------------------------------------ base, profile */
 
+/* The tick / background hand-off (lsm_atomic.h) on one core: 1 orders the shared accesses for the compiler only
+ * (an interrupt and the code it interrupts see each other's stores in program order), 0 with C11 acquire/release
+ * (a multi-core host, ThreadSanitizer). Default 1 on a bare-metal Cortex-M (__ARM_ARCH_7EM__, no OS), else 0;
+ * unit: a switch. */
+#ifndef LSM_HANDOFF_SINGLE_CORE
+#if defined(__ARM_ARCH_7EM__) && !defined(__linux__)
+#define LSM_HANDOFF_SINGLE_CORE 1
+#else
+#define LSM_HANDOFF_SINGLE_CORE 0
+#endif
+#endif
+
 /* Axes of one coordinated move (XYZ + ABC). Default 6; unit: axes. Sizes every per-axis array. */
 #ifndef LSM_MAX_AXES
 #define LSM_MAX_AXES 6

@@ -9,104 +9,111 @@ static lsm_real hypot_r(lsm_real a, lsm_real b)
     return lsm_sqrt(a * a + b * b);
 }
 
-/* Arc geometry in the plane (u, v) with normal w. */
-static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const lsm_real s[LSM_GCODE_N_AXES],
-                           const lsm_real e[LSM_GCODE_N_AXES], const lsm_real off[LSM_GCODE_N_AXES], lsm_real lin,
-                           uint32_t turns, uint32_t mcol, lsm_gcode_block *b, lsm_gcode_result *res)
-{
+/* The axes of an arc's plane (u, v) and its normal w, with the centre-offset letters along u and v and the one
+ * that is not allowed (G17: I J, not K). */
+typedef struct {
     int iu, iv, iw;
-    char lu, lv, lbad; /* offset letters along u and v, and the one that is not allowed */
-    switch (m->plane) {
-    case LSM_GCODE_PLANE_ZX:
-        iu = LSM_GCODE_Z;
-        iv = LSM_GCODE_X;
-        iw = LSM_GCODE_Y;
-        lu = 'K';
-        lv = 'I';
-        lbad = 'J';
-        break;
-    case LSM_GCODE_PLANE_YZ:
-        iu = LSM_GCODE_Y;
-        iv = LSM_GCODE_Z;
-        iw = LSM_GCODE_X;
-        lu = 'J';
-        lv = 'K';
-        lbad = 'I';
-        break;
+    char lu, lv, lbad;
+} gc_arc_axes;
+
+static gc_arc_axes arc_axes(lsm_gcode_plane plane)
+{
+    switch (plane) {
+    case LSM_GCODE_PLANE_ZX: return (gc_arc_axes){LSM_GCODE_Z, LSM_GCODE_X, LSM_GCODE_Y, 'K', 'I', 'J'};
+    case LSM_GCODE_PLANE_YZ: return (gc_arc_axes){LSM_GCODE_Y, LSM_GCODE_Z, LSM_GCODE_X, 'J', 'K', 'I'};
     case LSM_GCODE_PLANE_XY:
-    default:
-        iu = LSM_GCODE_X;
-        iv = LSM_GCODE_Y;
-        iw = LSM_GCODE_Z;
-        lu = 'I';
-        lv = 'J';
-        lbad = 'K';
-        break;
+    default: return (gc_arc_axes){LSM_GCODE_X, LSM_GCODE_Y, LSM_GCODE_Z, 'I', 'J', 'K'};
     }
-    const int dir = m->motion == LSM_GCODE_MOTION_CCW ? 1 : -1;
+}
+
+/* Stage 1: the arc's form (LinuxCNC: end words are optional in the centre form, whose end = start is a full
+ * circle; the radius form needs an end word in its plane) and a feed. */
+static lsm_status arc_check_form(const gc_words *w, const lsm_gcode_modal *m, const gc_arc_axes *ax, uint32_t mcol,
+                                 lsm_gcode_result *res)
+{
     const bool has_r = (w->seen & BIT('R')) != 0;
     const uint32_t ijk = w->seen & (BIT('I') | BIT('J') | BIT('K'));
-
-    /* form (LinuxCNC: end words are optional in the centre form, whose end = start is a full circle) */
     if (!has_r && !ijk)
         return fail_r(res, LSM_E_GC_ARC_FORM, mcol, "arc needs I J K (centre) or R (radius)");
     if (has_r && ijk) {
         uint32_t cr = w->col[LETTER('R')], ci = first_col(w, ijk);
         return fail_r(res, LSM_E_GC_ARC_FORM, cr > ci ? cr : ci, "arc with both R and I J K");
     }
-    if (has_r && !(w->seen & (BIT(k_axis_letters[iu]) | BIT(k_axis_letters[iv]))))
+    if (has_r && !(w->seen & (BIT(k_axis_letters[ax->iu]) | BIT(k_axis_letters[ax->iv]))))
         return fail_r(res, LSM_E_GC_ARC_FORM, mcol, "radius-form arc without an end word in its plane");
-    if (ijk & BIT(lbad))
-        return fail_r(res, LSM_E_GC_ARC_FORM, w->col[LETTER(lbad)], "centre offset off the arc's plane");
+    if (ijk & BIT(ax->lbad))
+        return fail_r(res, LSM_E_GC_ARC_FORM, w->col[LETTER(ax->lbad)], "centre offset off the arc's plane");
     if (m->feed_mm_s <= 0)
         return fail_r(res, LSM_E_GC_NO_FEED, mcol, "feed move with no feed (F) before");
+    return LSM_OK;
+}
 
-    /* same-point threshold: a few ulps of the coordinates */
-    const lsm_real scale = LSM_R(1.0) + lsm_fabs(s[iu]) + lsm_fabs(s[iv]);
-    const lsm_real same_eps = scale * (LSM_REAL_IS_FLOAT ? (lsm_real)4e-7 : (lsm_real)1e-12);
-    const lsm_real du = e[iu] - s[iu], dv = e[iv] - s[iv];
-    const lsm_real chord = hypot_r(du, dv);
-    const bool same = chord <= same_eps;
+/* Stage 2a: the centre of a radius-form arc (R, in the line's units); `same`: the end is the start. */
+static lsm_status arc_centre_r(const gc_words *w, const gc_arc_axes *ax, const lsm_real s[LSM_GCODE_N_AXES],
+                               const lsm_real e[LSM_GCODE_N_AXES], lsm_real lin, int dir, bool same, lsm_real c[2],
+                               lsm_gcode_result *res)
+{
     const lsm_real rtol = (lsm_real)LSM_GCODE_ARC_RADIUS_TOL_MM;
-    lsm_real cu, cv;
+    const lsm_real du = e[ax->iu] - s[ax->iu], dv = e[ax->iv] - s[ax->iv];
+    const lsm_real chord = hypot_r(du, dv);
+    const lsm_real r = w->val[LETTER('R')] * lin;
+    const lsm_real ar = lsm_fabs(r);
+    const uint32_t rcol = w->col[LETTER('R')];
+    if (same)
+        return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "radius-form arc ending on its start");
+    if (ar < rtol)
+        return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "arc radius too small");
+    lsm_real half = chord * LSM_R(0.5);
+    if (half - ar > rtol)
+        return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "arc radius shorter than half the chord");
+    lsm_real h2 = ar * ar - half * half;
+    lsm_real h = h2 > 0 ? lsm_sqrt(h2) : LSM_R(0.0);
+    /* the centre is left of the chord for a counter-clockwise arc of at most 180 degrees */
+    lsm_real side = (lsm_real)(dir * (r > 0 ? 1 : -1));
+    c[0] = s[ax->iu] + LSM_R(0.5) * du + side * h * (-dv / chord);
+    c[1] = s[ax->iv] + LSM_R(0.5) * dv + side * h * (du / chord);
+    return LSM_OK;
+}
 
-    if (has_r) {
-        const lsm_real r = w->val[LETTER('R')] * lin;
-        const lsm_real ar = lsm_fabs(r);
-        const uint32_t rcol = w->col[LETTER('R')];
-        if (same)
-            return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "radius-form arc ending on its start");
-        if (ar < rtol)
-            return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "arc radius too small");
-        lsm_real half = chord * LSM_R(0.5);
-        if (half - ar > rtol)
-            return fail_r(res, LSM_E_GC_ARC_RADIUS, rcol, "arc radius shorter than half the chord");
-        lsm_real h2 = ar * ar - half * half;
-        lsm_real h = h2 > 0 ? lsm_sqrt(h2) : LSM_R(0.0);
-        /* the centre is left of the chord for a counter-clockwise arc of at most 180 degrees */
-        lsm_real side = (lsm_real)(dir * (r > 0 ? 1 : -1));
-        cu = s[iu] + LSM_R(0.5) * du + side * h * (-dv / chord);
-        cv = s[iv] + LSM_R(0.5) * dv + side * h * (du / chord);
+/* Stage 2b: the centre of a centre-form arc (I J K, relative, or absolute under G90.1), and the check that start
+ * and end lie on one circle (LinuxCNC's tolerances). */
+static lsm_status arc_centre_ijk(const gc_words *w, const lsm_gcode_modal *m, const gc_arc_axes *ax,
+                                 const lsm_real s[LSM_GCODE_N_AXES], const lsm_real e[LSM_GCODE_N_AXES],
+                                 const lsm_real off[LSM_GCODE_N_AXES], lsm_real lin, uint32_t mcol, lsm_real c[2],
+                                 lsm_gcode_result *res)
+{
+    const int iu = ax->iu, iv = ax->iv;
+    const char lu = ax->lu, lv = ax->lv;
+    const uint32_t ijk = w->seen & (BIT('I') | BIT('J') | BIT('K'));
+    lsm_real ou = (w->seen & BIT(lu)) ? w->val[LETTER(lu)] * lin : LSM_R(0.0);
+    lsm_real ov = (w->seen & BIT(lv)) ? w->val[LETTER(lv)] * lin : LSM_R(0.0);
+    if (m->arc_absolute) { /* G90.1: program coordinates of the centre (a missing one: the start's) */
+        c[0] = (w->seen & BIT(lu)) ? ou + off[iu] : s[iu];
+        c[1] = (w->seen & BIT(lv)) ? ov + off[iv] : s[iv];
     } else {
-        lsm_real ou = (w->seen & BIT(lu)) ? w->val[LETTER(lu)] * lin : LSM_R(0.0);
-        lsm_real ov = (w->seen & BIT(lv)) ? w->val[LETTER(lv)] * lin : LSM_R(0.0);
-        if (m->arc_absolute) { /* G90.1: program coordinates of the centre (a missing one: the start's) */
-            cu = (w->seen & BIT(lu)) ? ou + off[iu] : s[iu];
-            cv = (w->seen & BIT(lv)) ? ov + off[iv] : s[iv];
-        } else {
-            cu = s[iu] + ou;
-            cv = s[iv] + ov;
-        }
-        lsm_real r1 = hypot_r(s[iu] - cu, s[iv] - cv);
-        lsm_real r2 = hypot_r(e[iu] - cu, e[iv] - cv);
-        if (r1 < rtol || r2 < rtol)
-            return fail_r(res, LSM_E_GC_ARC_CENTRE, first_col(w, ijk), "arc centre on its start or end point");
-        lsm_real err = lsm_fabs(r1 - r2);
-        lsm_real rmax = r1 > r2 ? r1 : r2;
-        if (err > (lsm_real)LSM_GCODE_ARC_ABS_TOL_MM || err > (lsm_real)LSM_GCODE_ARC_REL_TOL * rmax)
-            return fail_r(res, LSM_E_GC_ARC_MISMATCH, mcol, "arc start and end radii differ");
+        c[0] = s[iu] + ou;
+        c[1] = s[iv] + ov;
     }
+    const lsm_real rtol = (lsm_real)LSM_GCODE_ARC_RADIUS_TOL_MM;
+    lsm_real r1 = hypot_r(s[iu] - c[0], s[iv] - c[1]);
+    lsm_real r2 = hypot_r(e[iu] - c[0], e[iv] - c[1]);
+    if (r1 < rtol || r2 < rtol)
+        return fail_r(res, LSM_E_GC_ARC_CENTRE, first_col(w, ijk), "arc centre on its start or end point");
+    lsm_real err = lsm_fabs(r1 - r2);
+    lsm_real rmax = r1 > r2 ? r1 : r2;
+    if (err > (lsm_real)LSM_GCODE_ARC_ABS_TOL_MM || err > (lsm_real)LSM_GCODE_ARC_REL_TOL * rmax)
+        return fail_r(res, LSM_E_GC_ARC_MISMATCH, mcol, "arc start and end radii differ");
+    return LSM_OK;
+}
 
+/* Stage 3: the block, from the centre (cu, cv): the swept angle (a full turn when the end is the start) plus the
+ * extra turns (P). */
+static void arc_fill(const lsm_gcode_modal *m, const gc_arc_axes *ax, const lsm_real s[LSM_GCODE_N_AXES],
+                     const lsm_real e[LSM_GCODE_N_AXES], int dir, bool same, uint32_t turns, const lsm_real c[2],
+                     lsm_gcode_block *b)
+{
+    const int iu = ax->iu, iv = ax->iv, iw = ax->iw;
+    const lsm_real cu = c[0], cv = c[1];
     lsm_real ts = lsm_atan2(s[iv] - cv, s[iu] - cu);
     lsm_real te = lsm_atan2(e[iv] - cv, e[iu] - cu);
     lsm_real d = dir > 0 ? te - ts : ts - te;
@@ -129,6 +136,30 @@ static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const ls
     b->radius_end_mm = hypot_r(e[iu] - cu, e[iv] - cv);
     b->angle_rad = d + 2 * GC_PI * (lsm_real)(turns - 1u);
     b->helix_mm = e[iw] - s[iw];
+}
+
+/* Arc geometry in the plane (u, v) with normal w: form, centre, block. */
+static lsm_status make_arc(const gc_words *w, const lsm_gcode_modal *m, const lsm_real s[LSM_GCODE_N_AXES],
+                           const lsm_real e[LSM_GCODE_N_AXES], const lsm_real off[LSM_GCODE_N_AXES], lsm_real lin,
+                           uint32_t turns, uint32_t mcol, lsm_gcode_block *b, lsm_gcode_result *res)
+{
+    const gc_arc_axes ax = arc_axes(m->plane);
+    lsm_status st = arc_check_form(w, m, &ax, mcol, res);
+    if (st != LSM_OK)
+        return st;
+    const int dir = m->motion == LSM_GCODE_MOTION_CCW ? 1 : -1;
+    /* same-point threshold: a few ulps of the coordinates */
+    const lsm_real scale = LSM_R(1.0) + lsm_fabs(s[ax.iu]) + lsm_fabs(s[ax.iv]);
+    const lsm_real same_eps = scale * (LSM_REAL_IS_FLOAT ? (lsm_real)4e-7 : (lsm_real)1e-12);
+    const bool same = hypot_r(e[ax.iu] - s[ax.iu], e[ax.iv] - s[ax.iv]) <= same_eps;
+    lsm_real c[2];
+    if (w->seen & BIT('R'))
+        st = arc_centre_r(w, &ax, s, e, lin, dir, same, c, res);
+    else
+        st = arc_centre_ijk(w, m, &ax, s, e, off, lin, mcol, c, res);
+    if (st != LSM_OK)
+        return st;
+    arc_fill(m, &ax, s, e, dir, same, turns, c, b);
     return LSM_OK;
 }
 

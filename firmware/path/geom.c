@@ -252,19 +252,27 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     return LSM_OK;
 }
 
-lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], const lsm_real e1[3], const lsm_real e2[3],
-                                     lsm_real radius_mm, lsm_real phi0_rad, lsm_real sweep_rad, lsm_real axial_mm)
+/* A point, a frame (e1, e2) and four scalars: all finite and within range (geom_check). */
+static lsm_status geom_check_frame(const lsm_real p[3], const lsm_real e1[3], const lsm_real e2[3],
+                                   const lsm_real sc[4])
 {
-    if (g == NULL || centre == NULL || e1 == NULL || e2 == NULL)
-        return LSM_E_NULL;
-    const lsm_real sc[4] = {radius_mm, phi0_rad, sweep_rad, axial_mm};
-    lsm_status st = geom_check(centre, 3);
+    lsm_status st = geom_check(p, 3);
     if (st == LSM_OK)
         st = geom_check(e1, 3);
     if (st == LSM_OK)
         st = geom_check(e2, 3);
     if (st == LSM_OK)
         st = geom_check(sc, 4);
+    return st;
+}
+
+lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], const lsm_real e1[3], const lsm_real e2[3],
+                                     lsm_real radius_mm, lsm_real phi0_rad, lsm_real sweep_rad, lsm_real axial_mm)
+{
+    if (g == NULL || centre == NULL || e1 == NULL || e2 == NULL)
+        return LSM_E_NULL;
+    const lsm_real sc[4] = {radius_mm, phi0_rad, sweep_rad, axial_mm};
+    const lsm_status st = geom_check_frame(centre, e1, e2, sc);
     if (st != LSM_OK)
         return st;
     if (!(radius_mm > LSM_R(0.0)) || !geom_orthonormal(e1, e2))
@@ -304,13 +312,7 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
     if (g == NULL || origin == NULL || e1 == NULL || e2 == NULL)
         return LSM_E_NULL;
     const lsm_real sc[4] = {theta0_rad, kappa0_per_mm, c_per_mm2, len_mm};
-    lsm_status st = geom_check(origin, 3);
-    if (st == LSM_OK)
-        st = geom_check(e1, 3);
-    if (st == LSM_OK)
-        st = geom_check(e2, 3);
-    if (st == LSM_OK)
-        st = geom_check(sc, 4);
+    const lsm_status st = geom_check_frame(origin, e1, e2, sc);
     if (st != LSM_OK)
         return st;
     if (!geom_orthonormal(e1, e2))

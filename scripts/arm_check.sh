@@ -93,7 +93,7 @@ for elf in "${ELFS[@]}"; do
     if [ -n "$bad" ]; then fail "double-$(basename "$elf" .elf)"; echo "  $(basename "$elf"): $bad"
     else echo "ok: $(basename "$elf"): no double-precision routines"; fi
 done
-warn=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
+warn=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
        grep -E " ($(sed 's/^\^//;s/\$$//' <<<"$DBL_RE")|$(sed 's/^\^//;s/\$$//' <<<"$LIBM_D_RE"))$" |
        sed -E 's#^.*\(?liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 if [ -n "$warn" ]; then
@@ -102,7 +102,7 @@ if [ -n "$warn" ]; then
 else
     echo "ok: float core archive refers to no double-precision routine"
 fi
-info=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk '$(NF-1)=="U"{print $1" "$NF}' |
+info=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
        grep -E ' __aeabi_(ldivmod|uldivmod|l2f|ul2f|f2lz|f2ulz|llsl|llsr|lasr|lmul)$' |
        sed -E 's#^.*liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 [ -n "$info" ] && { echo "note: 64-bit integer helpers (software routines) used by the float core:"; sed 's/^/  /' <<<"$info"; }

@@ -9,8 +9,9 @@
  * Writes DIR/setpoints.csv (t, then one column per machine axis), DIR/run.csv (the run CSV of docs/host_sim.md:
  * setpoints, actual positions and following error from the simulated drives, feed, and per-axis v, a, j),
  * DIR/summary.json (what --json prints), and with --plots the PNGs of hil/lissom_hil/plot.py. With --no-csv only
- * summary.json is written (the same summary: the metrics come from the recorded setpoints either way); formatting
- * run.csv costs about half the host time of a --no-drive run (the benchmark against Klipper, docs/planner.md).
+ * summary.json is written (the same summary), and the run keeps no setpoint: it measures them as they come, in
+ * constant memory (sim_run_opts.summary_only); formatting run.csv costs about half the host time of a --no-drive
+ * run (the benchmark against Klipper, docs/planner.md).
  * A progress bar (progress.h) goes to stderr: on a terminal once the run has taken 2 s of wall time, always with
  * --progress (one line per 10 % step when stderr is not a terminal), never with --no-progress. Stdout only
  * ever holds the summary.
@@ -110,7 +111,7 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         fprintf(f, ", \"j_max\": ");
         json_num(f, x->j_max_u_s3);
         fprintf(f, ", \"within_limits\": %s", ok ? "true" : "false");
-        if (r->act) {
+        if (r->has_act) {
             fprintf(f, ", \"max_following_error\": ");
             json_num(f, r->max_follow_err[a]);
         }
@@ -288,6 +289,7 @@ int cmd_run(int argc, char **argv)
     o.len = len;
     o.capacity = (uint32_t)capacity;
     o.drives = !no_drive;
+    o.summary_only = no_csv; /* constant memory: nothing is kept for CSVs */
     const bool terminal = isatty(2) != 0;
     sim_progress prog;
     sim_progress_init(&prog, stderr, progress_on || (terminal && !progress_off), terminal, progress_on ? 0 : 2.0);

@@ -176,6 +176,24 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
     return LSM_OK;
 }
 
+lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
+{
+    if (p->mode == LSM_AXPROF_MOVE && p->defer != AXPROF_DEFER_NONE)
+        p->defer = AXPROF_DEFER_NONE; /* a deferred halt or retarget is superseded by this stop */
+    if (p->mode == LSM_AXPROF_MOVE && in_jerk_pulse(p)) { /* start now: jstop releases the jerk in progress */
+        p->have_after = false;
+        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
+        if (st != LSM_OK)
+            return st;
+        p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+        p->stop_kind = kind;
+        if (p->mode == LSM_AXPROF_IDLE)
+            p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+        return LSM_OK;
+    }
+    return lsm_axprof_stop(p, lim, kind);
+}
+
 /* A deferred request, taken at the end of the jerk pulse (the move's jerk is 0, or the move has ended). */
 static void take_deferred(lsm_axprof *p)
 {

@@ -379,7 +379,10 @@ void lsm_motion_tick_end(lsm_motion *m, lsm_canopen *co)
     if (m->path_exec == LSM_MOTION_PATH_EXACT || t->posted - t->consumed <= m->lead_cycles)
         return; /* nothing due yet (the first lead cycles) */
     lsm_co_path *cp = lsm_canopen_path(co);
-    if (lsm_spsc_avail(&m->pipe.out_idx) == 0u) {
+    const uint32_t ready = lsm_spsc_avail(&m->pipe.out_idx);
+    if (t->have_last && t->last.moving && (t->min_ahead == 0u || ready + 1u < t->min_ahead))
+        t->min_ahead = ready + 1u;
+    if (ready == 0u) {
         if (t->aborting)
             return;
         if (t->have_last && t->last.moving)

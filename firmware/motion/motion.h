@@ -86,6 +86,7 @@ typedef struct lsm_motion_tk {
     uint32_t underruns;       /* a set-point was due and none was there while the path moved: abort stop */
     uint32_t stalls;          /* ... while the path was at rest: the demand held (no abort) */
     uint32_t in_full;         /* records not posted: the background is LSM_MPIPE_CAP cycles behind */
+    uint32_t min_ahead;       /* fewest set-points ready when one was due while the path moved, + 1 (0: never) */
 } lsm_motion_tk;
 
 /* The background's side of the path hand-off; written by the background only. */

@@ -179,7 +179,7 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
 lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
 {
     if (p->mode == LSM_AXPROF_MOVE && p->defer != AXPROF_DEFER_NONE)
-        p->defer = AXPROF_DEFER_NONE; /* a deferred halt or retarget is superseded by this stop */
+        p->defer = AXPROF_DEFER_NONE;                     /* a deferred halt or retarget is superseded by this stop */
     if (p->mode == LSM_AXPROF_MOVE && in_jerk_pulse(p)) { /* start now: jstop releases the jerk in progress */
         p->have_after = false;
         lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);

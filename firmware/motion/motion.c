@@ -320,6 +320,26 @@ void lsm_motion_tick_begin(lsm_motion *m, lsm_canopen *co)
     tick_post(m, cp, cpm, pos);
 }
 
+/* Axis k's state at the last set-point, from the set-point velocities (backward differences: v1 is the velocity
+ * half a cycle before it, a1 = (v1 - v0) / dt one cycle before, j from the two differences), clamped to the
+ * machine's limits. */
+static void abort_state(const lsm_motion *m, unsigned k, lsm_kin *st)
+{
+    const lsm_motion_tk *t = &m->tk;
+    const lsm_axis_limits *l = &m->lim[k];
+    const lsm_real dt = m->cycle_s;
+    const lsm_real v1 = t->last.vel_mm_s[k], v0 = t->prev_vel_mm_s[k], vm = t->prev2_vel_mm_s[k];
+    const lsm_real a1 = (v1 - v0) / dt;
+    lsm_real j = (a1 - (v0 - vm) / dt) / dt;
+    j = lsm_max2(-l->j_max_mm_s3, lsm_min2(l->j_max_mm_s3, j));
+    lsm_real a = a1 + j * dt;
+    a = lsm_max2(-l->a_max_mm_s2, lsm_min2(l->a_max_mm_s2, a));
+    st->s_mm = t->last.pos_mm[k];
+    st->v_mm_s = v1 + (a1 + j * dt / 2) * dt / 2;
+    st->a_mm_s2 = a;
+    st->j_mm_s3 = j;
+}
+
 /* Underrun while the path moves: every path axis stops from its last state at the machine's limits. */
 static void tick_abort(lsm_motion *m, lsm_co_path *cp)
 {
@@ -333,12 +353,7 @@ static void tick_abort(lsm_motion *m, lsm_co_path *cp)
             continue;
         const lsm_axis_limits *l = &m->lim[k];
         const lsm_jstop_limits sl = {l->a_max_mm_s2, l->j_max_mm_s3, l->snap_max_mm_s4};
-        lsm_real acc = (t->last.vel_mm_s[k] - t->prev_vel_mm_s[k]) / m->cycle_s;
-        acc = lsm_max2(-l->a_max_mm_s2, lsm_min2(l->a_max_mm_s2, acc));
-        a->prof.k.s_mm = t->last.pos_mm[k];
-        a->prof.k.v_mm_s = t->last.vel_mm_s[k];
-        a->prof.k.a_mm_s2 = acc;
-        a->prof.k.j_mm_s3 = 0;
+        abort_state(m, k, &a->prof.k);
         (void)lsm_axprof_stop_urgent(&a->prof, &sl, (uint8_t)LSM_CIA402_STOP_EMERGENCY);
     }
     lsm_co_path_reject(cp, t->last.rep.active_seq); /* the path is dropped: EMCY 0xFF01, buffer flushed */
@@ -359,6 +374,7 @@ static void tick_apply(lsm_motion *m, lsm_co_path *cp, const lsm_mpipe_out *o)
         t->aborting = false;
     }
     for (unsigned k = 0; k < m->n_axes; k++) {
+        t->prev2_vel_mm_s[k] = t->prev_vel_mm_s[k];
         t->prev_vel_mm_s[k] = m->path_vel_mm_s[k];
         m->path_pos_mm[k] = o->pos_mm[k];
         m->path_vel_mm_s[k] = o->vel_mm_s[k];

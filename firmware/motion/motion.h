@@ -74,30 +74,31 @@ typedef struct lsm_motion_config {
 
 /* The tick's side of the path hand-off (mpipe.h); written by the control cycle only. */
 typedef struct lsm_motion_tk {
-    uint32_t posted;          /* records posted (the tick's count) */
-    uint32_t consumed;        /* set-points consumed */
-    uint32_t blocks_in;       /* blocks handed over */
-    uint32_t rejects_seen;    /* refusals passed on to co_path */
-    uint32_t abort;           /* path aborts by the tick (underruns while moving) */
-    bool aborting;            /* the path axes run the tick's abort stop, until the background restarted */
+    uint32_t posted;       /* records posted (the tick's count) */
+    uint32_t consumed;     /* set-points consumed */
+    uint32_t blocks_in;    /* blocks handed over */
+    uint32_t rejects_seen; /* refusals passed on to co_path */
+    uint32_t abort;        /* path aborts by the tick (underruns while moving) */
+    bool aborting;         /* the path axes run the tick's abort stop, until the background restarted */
     bool have_last;
-    lsm_mpipe_out last;       /* the last set-point consumed */
-    lsm_real prev_vel_mm_s[LSM_MAX_AXES]; /* velocity of the set-point before it (acceleration estimate) */
-    uint32_t underruns;       /* a set-point was due and none was there while the path moved: abort stop */
-    uint32_t stalls;          /* ... while the path was at rest: the demand held (no abort) */
-    uint32_t in_full;         /* records not posted: the background is LSM_MPIPE_CAP cycles behind */
-    uint32_t min_ahead;       /* fewest set-points ready when one was due while the path moved, + 1 (0: never) */
+    lsm_mpipe_out last;                    /* the last set-point consumed */
+    lsm_real prev_vel_mm_s[LSM_MAX_AXES];  /* velocity of the set-point before it (a, j estimates) ... */
+    lsm_real prev2_vel_mm_s[LSM_MAX_AXES]; /* ... and of the one before that */
+    uint32_t underruns;                    /* a set-point was due and none was there while the path moved: abort stop */
+    uint32_t stalls;                       /* ... while the path was at rest: the demand held (no abort) */
+    uint32_t in_full;                      /* records not posted: the background is LSM_MPIPE_CAP cycles behind */
+    uint32_t min_ahead; /* fewest set-points ready when one was due while the path moved, + 1 (0: never) */
 } lsm_motion_tk;
 
 /* The background's side of the path hand-off; written by the background only. */
 typedef struct lsm_motion_bg {
-    uint32_t blocks_used;     /* blocks consumed */
+    uint32_t blocks_used; /* blocks consumed */
     uint32_t rejects, reject_seq;
-    uint32_t abort_seen;      /* the tick's abort the planner was restarted for */
-    uint16_t drop_epoch;      /* blocks of this epoch are dropped (after a refusal, until the epoch changes) */
+    uint32_t abort_seen; /* the tick's abort the planner was restarted for */
+    uint16_t drop_epoch; /* blocks of this epoch are dropped (after a refusal, until the epoch changes) */
     bool drop_valid;
-    const lsm_mpipe_in *rec;  /* the record being turned into a set-point */
-    uint32_t cycles;          /* set-points produced */
+    const lsm_mpipe_in *rec; /* the record being turned into a set-point */
+    uint32_t cycles;         /* set-points produced */
 } lsm_motion_bg;
 
 typedef struct lsm_motion_axis {

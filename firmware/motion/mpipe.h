@@ -87,17 +87,17 @@ static inline void lsm_spsc_pop(lsm_spsc *r)
 
 /* tick -> background, one per tick. */
 typedef struct lsm_mpipe_in {
-    uint32_t stamp;           /* the tick's count */
-    uint32_t blocks_in;       /* blocks handed over up to and including this tick (count) */
-    uint32_t cp_count;        /* blocks left in the node's co_path buffer after the hand-over */
-    uint32_t abort;           /* the tick's path aborts so far */
-    uint16_t epoch;           /* co_path epoch */
-    uint8_t override_pct;     /* 0x5001 */
-    uint8_t motion;           /* lsm_co_path_motion */
-    uint8_t abort_rest;       /* the tick's abort stop has reached rest at pos_mm: restart the planner there */
+    uint32_t stamp;       /* the tick's count */
+    uint32_t blocks_in;   /* blocks handed over up to and including this tick (count) */
+    uint32_t cp_count;    /* blocks left in the node's co_path buffer after the hand-over */
+    uint32_t abort;       /* the tick's path aborts so far */
+    uint16_t epoch;       /* co_path epoch */
+    uint8_t override_pct; /* 0x5001 */
+    uint8_t motion;       /* lsm_co_path_motion */
+    uint8_t abort_rest;   /* the tick's abort stop has reached rest at pos_mm: restart the planner there */
     uint8_t reserved[3];
-    lsm_real pos_mm[LSM_MAX_AXES];  /* every axis's demand after the tick's own axis steps */
-    lsm_real cpm[LSM_MAX_AXES];     /* counts per mm (0x2001) */
+    lsm_real pos_mm[LSM_MAX_AXES]; /* every axis's demand after the tick's own axis steps */
+    lsm_real cpm[LSM_MAX_AXES];    /* counts per mm (0x2001) */
 } lsm_mpipe_in;
 
 /* tick -> background: a block with the co_path epoch it belongs to. */
@@ -111,10 +111,10 @@ typedef struct lsm_mpipe_out {
     lsm_real pos_mm[LSM_MAX_AXES];
     lsm_real vel_mm_s[LSM_MAX_AXES];
     lsm_co_path_report rep;
-    uint32_t blocks_used;  /* blocks consumed (appended, refused or dropped) through this record */
-    uint32_t rejects;      /* blocks refused so far; the last one is reject_seq */
+    uint32_t blocks_used; /* blocks consumed (appended, refused or dropped) through this record */
+    uint32_t rejects;     /* blocks refused so far; the last one is reject_seq */
     uint32_t reject_seq;
-    uint32_t abort;        /* the tick's abort count this set-point follows */
+    uint32_t abort; /* the tick's abort count this set-point follows */
     bool moving;
 } lsm_mpipe_out;
 

@@ -31,11 +31,13 @@
  * again (none is lost or run twice; the junction becomes an exact stop). If the axes stand on no block end, it
  * does nothing and counts it (stuck).
  *
- * Contexts: lsm_pathfeed_step runs once per control cycle; it appends blocks, lets the interpolator prepare
- * the next piece (lsm_interp_prepare) and steps it, in that order, as a synchronous loop. Its two halves are
- * lsm_pathfeed_background (appends, prepare) and lsm_pathfeed_tick (the interpolator step and the report).
- * lsm_pathfeed_init: before the cycle runs. Caller-owned memory (planner blocks and block copies), no
- * allocation.
+ * Contexts: the whole feed (planner, interpolator, block copies) belongs to ONE context, the one that calls
+ * lsm_pathfeed_background(_io) and lsm_pathfeed_tick(_io): planner.h / interp.h do not yet hand their state between
+ * a preempting lsm_interp_step and the appends / lsm_interp_prepare (docs/planner.md, "Concurrency"), so the feed
+ * never splits them. In the synchronous loop that context is the control cycle (lsm_pathfeed_step: background
+ * half, then the step). In the CiA 402 layer's split (motion.h) it is the background, which runs the feed ahead of
+ * the tick and hands each cycle's set-points over (mpipe.h): the tick then calls nothing here. lsm_pathfeed_init:
+ * before either runs. Caller-owned memory (planner blocks and block copies), no allocation.
  *
  * Units: mm, s (block values in counts and µm are converted with each axis's counts per mm, 0x2001).
  */
@@ -108,15 +110,16 @@ lsm_status lsm_pathfeed_init(lsm_pathfeed *pf, uint8_t n_axes, lsm_real cycle_s,
                              const lsm_real *pos_mm, const lsm_pathfeed_storage *mem);
 
 /* The axes moved by other means: restart the (empty, idle) planner at these positions. Ignored while the
- * planner holds blocks or moves. Control cycle (synchronous loop). */
+ * planner holds blocks or moves. The feed's context. */
 void lsm_pathfeed_sync(lsm_pathfeed *pf, const lsm_real *pos_mm);
 
 /* One control cycle of the synchronous loop: lsm_pathfeed_background then lsm_pathfeed_tick. cpm[k] = counts
- * per mm of axis k (0x2001). Fills the report for lsm_co_path_update. */
+ * per mm of axis k (0x2001). Fills the report for lsm_co_path_update. The feed's context (which owns cp too). */
 void lsm_pathfeed_step(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm, lsm_co_path_report *rep);
 
 /* The co_path commands (epoch, override, run / hold), the block appends and the underrun workaround, then
- * lsm_interp_prepare. Background of the synchronous loop. */
+ * lsm_interp_prepare, reading the node's co_path buffer directly. The feed's context, which must then own cp too
+ * (the synchronous loop). */
 void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm);
 
 /* The same from any block source (lsm_pathfeed_io above). The context that owns the feed's planner: the
@@ -135,7 +138,7 @@ void lsm_pathfeed_tick_io(lsm_pathfeed *pf, size_t pending, lsm_co_path_report *
  * lsm_planner_init. The context that owns the feed. */
 lsm_status lsm_pathfeed_restart_at(lsm_pathfeed *pf, const lsm_real *pos_mm);
 
-/* True while the interpolator moves. Any context of the owner. */
+/* True while the interpolator moves. The feed's context. */
 bool lsm_pathfeed_moving(const lsm_pathfeed *pf);
 
 #endif /* LSM_PATHFEED_H */

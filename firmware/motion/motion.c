@@ -182,6 +182,8 @@ static void axis_step(lsm_motion *m, unsigned k, lsm_canopen *co)
     lsm_cia402 *ax = lsm_canopen_axis(co, k);
     lsm_motion_axis *a = &m->ax[k];
     if (ax->mode_display != a->mode) { /* the display changes only at rest */
+        if (ax->mode_display == LSM_CIA402_MODE_PATH)
+            m->tk.sync_gen++; /* the feed takes this axis's demand (tick_post) */
         a->mode = ax->mode_display;
         a->pp_running = false;
         a->csp_active = false;
@@ -233,6 +235,8 @@ static void tick_hand_blocks(lsm_motion *m, lsm_co_path *cp)
 {
     lsm_motion_tk *t = &m->tk;
     const uint32_t used = t->have_last ? t->last.blocks_used : 0u;
+    if (lsm_co_path_get_motion(cp) != LSM_CO_PATH_MOTION_RUN)
+        return; /* the feed appends only while the path runs: the blocks stay in co_path (0x5003) */
     lsm_co_path_block b;
     while (t->blocks_in - used < LSM_MPIPE_BLOCKS && lsm_co_path_peek(cp, 0, &b)) {
         (void)lsm_co_path_pop(cp, &b);
@@ -290,6 +294,12 @@ static void tick_post(lsm_motion *m, lsm_co_path *cp, const lsm_real *cpm, const
     r->epoch = cp->epoch;
     r->override_pct = cp->override_pct;
     r->motion = (uint8_t)lsm_co_path_get_motion(cp);
+    r->sync_gen = t->sync_gen;
+    r->path_mask = 0u;
+    for (unsigned k = 0; k < m->n_axes; k++) {
+        if (m->ax[k].mode == LSM_CIA402_MODE_PATH)
+            r->path_mask |= (uint8_t)(1u << k);
+    }
     for (unsigned k = 0; k < LSM_MAX_AXES; k++) {
         r->pos_mm[k] = k < m->n_axes ? pos[k] : 0;
         r->cpm[k] = k < m->n_axes ? cpm[k] : 1;
@@ -379,7 +389,7 @@ static void tick_apply(lsm_motion *m, lsm_co_path *cp, const lsm_mpipe_out *o)
         m->path_pos_mm[k] = o->pos_mm[k];
         m->path_vel_mm_s[k] = o->vel_mm_s[k];
         lsm_motion_axis *a = &m->ax[k];
-        if (a->mode == LSM_CIA402_MODE_PATH) {
+        if (a->mode == LSM_CIA402_MODE_PATH && o->sync_gen == t->sync_gen) { /* made after the feed took its demand */
             a->prof.k.s_mm = o->pos_mm[k];
             a->prof.k.v_mm_s = o->vel_mm_s[k];
             a->prof.k.a_mm_s2 = a->prof.k.j_mm_s3 = 0;
@@ -462,6 +472,18 @@ static size_t bg_pending(void *ctx)
     return (size_t)g->rec->cp_count + (size_t)(g->rec->blocks_in - g->blocks_used);
 }
 
+/* lsm_pathfeed_sync with the axes' demands: a path-mode axis's demand is the feed's own output of lead cycles ago,
+ * so it counts only when an axis entered path mode since the last record (its demand then comes from elsewhere). */
+static void bg_sync(lsm_motion *m, const lsm_mpipe_in *r)
+{
+    lsm_real pos[LSM_MAX_AXES] = {0};
+    const bool entered = r->sync_gen != m->bg.sync_seen;
+    for (unsigned k = 0; k < m->n_axes; k++)
+        pos[k] = !entered && (r->path_mask & (1u << k)) != 0u ? m->feed.pos_mm[k] : r->pos_mm[k];
+    m->bg.sync_seen = r->sync_gen;
+    lsm_pathfeed_sync(&m->feed, pos);
+}
+
 /* A tick's abort: once its stop is at rest, the planner restarts there (its blocks dropped). */
 static bool bg_follow_abort(lsm_motion *m, const lsm_mpipe_in *r)
 {
@@ -488,7 +510,7 @@ bool lsm_motion_background(lsm_motion *m)
     if (g->drop_valid && r->epoch != g->drop_epoch)
         g->drop_valid = false;
     const bool stopping = bg_follow_abort(m, r);
-    lsm_pathfeed_sync(&m->feed, r->pos_mm);
+    bg_sync(m, r);
     if (!stopping) {
         const lsm_pathfeed_io io = {r->epoch, r->override_pct, r->motion, bg_peek, bg_pop, bg_reject, bg_pending, m};
         lsm_pathfeed_background_io(&m->feed, &io, r->cpm);
@@ -502,6 +524,7 @@ bool lsm_motion_background(lsm_motion *m)
     o->rejects = g->rejects;
     o->reject_seq = g->reject_seq;
     o->abort = g->abort_seen;
+    o->sync_gen = g->sync_seen;
     lsm_spsc_push(&m->pipe.out_idx);
     lsm_spsc_pop(&m->pipe.in_idx);
     g->rec = NULL;

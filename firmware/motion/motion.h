@@ -79,6 +79,7 @@ typedef struct lsm_motion_tk {
     uint32_t blocks_in;    /* blocks handed over */
     uint32_t rejects_seen; /* refusals passed on to co_path */
     uint32_t abort;        /* path aborts by the tick (underruns while moving) */
+    uint32_t sync_gen;     /* axes that entered path mode (their demand goes to the feed) */
     bool aborting;         /* the path axes run the tick's abort stop, until the background restarted */
     bool have_last;
     lsm_mpipe_out last;                    /* the last set-point consumed */
@@ -95,6 +96,7 @@ typedef struct lsm_motion_bg {
     uint32_t blocks_used; /* blocks consumed */
     uint32_t rejects, reject_seq;
     uint32_t abort_seen; /* the tick's abort the planner was restarted for */
+    uint32_t sync_seen;  /* the tick's sync_gen the feed was synced to */
     uint16_t drop_epoch; /* blocks of this epoch are dropped (after a refusal, until the epoch changes) */
     bool drop_valid;
     const lsm_mpipe_in *rec; /* the record being turned into a set-point */

@@ -95,6 +95,8 @@ typedef struct lsm_mpipe_in {
     uint8_t override_pct; /* 0x5001 */
     uint8_t motion;       /* lsm_co_path_motion */
     uint8_t abort_rest;   /* the tick's abort stop has reached rest at pos_mm: restart the planner there */
+    uint8_t path_mask;    /* axes in path mode (bit k): their pos_mm lags the feed by the lead, not synced */
+    uint32_t sync_gen;    /* the tick's count of axes entering path mode: sync the feed to pos_mm (all axes) */
     uint8_t reserved[3];
     lsm_real pos_mm[LSM_MAX_AXES]; /* every axis's demand after the tick's own axis steps */
     lsm_real cpm[LSM_MAX_AXES];    /* counts per mm (0x2001) */
@@ -114,7 +116,8 @@ typedef struct lsm_mpipe_out {
     uint32_t blocks_used; /* blocks consumed (appended, refused or dropped) through this record */
     uint32_t rejects;     /* blocks refused so far; the last one is reject_seq */
     uint32_t reject_seq;
-    uint32_t abort; /* the tick's abort count this set-point follows */
+    uint32_t abort;    /* the tick's abort count this set-point follows */
+    uint32_t sync_gen; /* the tick's sync_gen the feed had synced to when it made this set-point */
     bool moving;
 } lsm_mpipe_out;
 

@@ -253,6 +253,15 @@ static void test_reference_runs(void **state)
     assert_int_equal(g_app.emcy_ff01, 0);
     assert_int_equal(g_ref.seq[N_TICKS - 1u], N_BLOCKS);
     assert_false(g_app.mo.path_moving);
+    uint8_t type;
+    int32_t end[3], centre[2];
+    uint32_t feed;
+    program_block(N_BLOCKS, &type, end, centre, &feed);
+    for (unsigned k = 0; k < 3; k++) { /* the programmed end, exactly (no lagging demand fed back into the feed) */
+        int64_t v = 0;
+        assert_int_equal(lsm_co_od_get_int(lsm_canopen_od(&g_app.co), AX(0x6062, k), 0, &v), 0);
+        assert_int_equal(v, end[k]);
+    }
     assert_true(memcmp(g_ref.p[2600], g_ref.p[2800], sizeof g_ref.p[0]) == 0); /* held */
     assert_true(memcmp(g_ref.p[1000], g_ref.p[1001], sizeof g_ref.p[0]) != 0); /* moving */
 }

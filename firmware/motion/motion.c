@@ -5,6 +5,11 @@
 
 #include "lsm_math.h"
 
+/* Cycles between taking a PP set-point and starting its move when the background plans it (lead_cycles > 0): a
+ * move plan is ~40-250 k instructions on the M4, under two ticks of background; 8 leave room for a path piece plan
+ * running at the same time. */
+#define MO_PP_PLAN_CYCLES 8u
+
 /* Longest CSP interpolation period in cycles (0x60C2 beyond it is clamped): 100 s at 1 ms. */
 #define MO_CSP_CYCLES_MAX 100000u
 /* Profile type 0: the snap limit that makes a jerk rise one cycle long (as axprof.h). */
@@ -127,6 +132,74 @@ static void axis_stop(lsm_motion *m, unsigned k, const lsm_cia402 *ax, lsm_cia40
     else
         (void)lsm_axprof_stop(&a->prof, &sl, (uint8_t)kind);
     a->pp_running = false;
+    a->pp_wait = false; /* a plan in the background is dropped */
+}
+
+/* Posts axis k's PP plan request (lead_cycles > 0): the move starts MO_PP_PLAN_CYCLES cycles from now, planned from
+ * the generator's state then (the background steps a copy there, as the tick steps its own). */
+static void pp_post(lsm_motion *m, unsigned k)
+{
+    lsm_motion_axis *a = &m->ax[k];
+    a->pp_wait = true;
+    a->pp_have = false;
+    a->pp_unsent = lsm_spsc_room(&m->pipe.pp_req_idx, LSM_MPIPE_PP) == 0u;
+    if (a->pp_unsent)
+        return;
+    lsm_mpipe_pp *r = &m->pipe.pp_req[lsm_spsc_wr(&m->pipe.pp_req_idx) & (LSM_MPIPE_PP - 1u)];
+    r->base = a->prof;
+    r->lim = a->pp_lim;
+    r->target_mm = a->pp_target_mm;
+    r->gen = ++a->pp_gen;
+    r->steps = MO_PP_PLAN_CYCLES;
+    r->axis = (uint8_t)k;
+    lsm_spsc_push(&m->pipe.pp_req_idx);
+    a->pp_due = m->tk.cycle + MO_PP_PLAN_CYCLES;
+    a->pp_from_rest = a->prof.mode == LSM_AXPROF_IDLE && a->prof.k.v_mm_s == 0 && a->prof.k.a_mm_s2 == 0;
+}
+
+/* The plan results that arrived: kept by their axis if still wanted. */
+static void pp_collect(lsm_motion *m)
+{
+    while (lsm_spsc_avail(&m->pipe.pp_res_idx) != 0u) {
+        const lsm_mpipe_pp *r = &m->pipe.pp_res[lsm_spsc_rd(&m->pipe.pp_res_idx) & (LSM_MPIPE_PP - 1u)];
+        lsm_motion_axis *a = &m->ax[r->axis];
+        if (a->pp_wait && !a->pp_unsent && r->gen == a->pp_gen) {
+            a->pp_res = r->base;
+            a->pp_st = r->st;
+            a->pp_have = true;
+        }
+        lsm_spsc_pop(&m->pipe.pp_res_idx);
+    }
+}
+
+/* Axis k's requested plan, before the cycle's step: taken at its cycle (or later if it starts from rest and the axis
+ * still rests); requested again if it came too late for a moving axis. */
+static void pp_take(lsm_motion *m, unsigned k, lsm_canopen *co)
+{
+    lsm_motion_axis *a = &m->ax[k];
+    if (!a->pp_wait)
+        return;
+    const bool resting = a->prof.mode == LSM_AXPROF_IDLE && a->prof.k.v_mm_s == 0 && a->prof.k.a_mm_s2 == 0;
+    if (a->pp_unsent || (!(a->pp_from_rest && resting) && m->tk.cycle > a->pp_due) ||
+        (!a->pp_have && !(a->pp_from_rest && resting) && m->tk.cycle == a->pp_due)) {
+        if (!a->pp_unsent)
+            a->pp_late++;
+        pp_post(m, k);
+        return;
+    }
+    if (!a->pp_have || (m->tk.cycle < a->pp_due && !a->pp_from_rest))
+        return;
+    if (m->tk.cycle < a->pp_due)
+        return; /* from rest: the move starts at its cycle */
+    a->pp_wait = false;
+    if (a->pp_st == LSM_OK) {
+        a->prof = a->pp_res;
+        a->prof.gen.mv = &a->prof.mv; /* the copy's generator reads its own plan */
+        a->pp_running = true;
+    } else {
+        a->plan_errors++;
+        (void)lsm_canopen_axis_fault(co, k, LSM_CO_EMCY_SOFTWARE);
+    }
 }
 
 static void axis_pp(lsm_motion *m, unsigned k, lsm_canopen *co, lsm_cia402 *ax)
@@ -137,6 +210,12 @@ static void axis_pp(lsm_motion *m, unsigned k, lsm_canopen *co, lsm_cia402 *ax)
         return;
     const lsm_real cpm = (lsm_real)ax->counts_per_mm;
     const lsm_axprof_limits pl = pp_limits(m, k, &sp, cpm);
+    if (m->lead_cycles > 0u) { /* the background plans it (mpipe.h) */
+        a->pp_target_mm = (lsm_real)sp.target / cpm;
+        a->pp_lim = pl;
+        pp_post(m, k);
+        return;
+    }
     if (lsm_axprof_move(&a->prof, (lsm_real)sp.target / cpm, &pl) == LSM_OK) {
         a->pp_running = true;
     } else {
@@ -186,6 +265,7 @@ static void axis_step(lsm_motion *m, unsigned k, lsm_canopen *co)
             m->tk.sync_gen++; /* the feed takes this axis's demand (tick_post) */
         a->mode = ax->mode_display;
         a->pp_running = false;
+        a->pp_wait = false;
         a->csp_active = false;
     }
     if (a->mode == LSM_CIA402_MODE_PATH)
@@ -196,6 +276,8 @@ static void axis_step(lsm_motion *m, unsigned k, lsm_canopen *co)
         axis_stop(m, k, ax, kind);
     else if (a->mode == LSM_CIA402_MODE_PP)
         axis_pp(m, k, co, ax);
+    if (a->mode == LSM_CIA402_MODE_PP)
+        pp_take(m, k, co);
     else if (a->mode == LSM_CIA402_MODE_CSP)
         axis_csp_fetch(m, k, ax);
     if (a->prof.mode != LSM_AXPROF_IDLE)
@@ -311,6 +393,8 @@ static void tick_post(lsm_motion *m, lsm_co_path *cp, const lsm_real *cpm, const
 void lsm_motion_tick_begin(lsm_motion *m, lsm_canopen *co)
 {
     lsm_real cpm[LSM_MAX_AXES], pos[LSM_MAX_AXES];
+    m->tk.cycle++;
+    pp_collect(m);
     for (unsigned k = 0; k < m->n_axes; k++) {
         axis_step(m, k, co);
         cpm[k] = (lsm_real)lsm_canopen_axis(co, k)->counts_per_mm;
@@ -499,8 +583,29 @@ static bool bg_follow_abort(lsm_motion *m, const lsm_mpipe_in *r)
     return true; /* still stopping: no appends */
 }
 
+/* One PP plan request: a copy of the generator stepped to the move's first cycle, the move planned there. */
+static bool bg_pp(lsm_motion *m)
+{
+    if (lsm_spsc_avail(&m->pipe.pp_req_idx) == 0u || lsm_spsc_room(&m->pipe.pp_res_idx, LSM_MPIPE_PP) == 0u)
+        return false;
+    const lsm_mpipe_pp *q = &m->pipe.pp_req[lsm_spsc_rd(&m->pipe.pp_req_idx) & (LSM_MPIPE_PP - 1u)];
+    lsm_mpipe_pp *r = &m->pipe.pp_res[lsm_spsc_wr(&m->pipe.pp_res_idx) & (LSM_MPIPE_PP - 1u)];
+    r->base = q->base;
+    r->base.gen.mv = &r->base.mv;
+    for (uint32_t i = 0; i < q->steps; i++)
+        (void)lsm_axprof_step(&r->base);
+    r->st = lsm_axprof_move(&r->base, q->target_mm, &q->lim);
+    r->gen = q->gen;
+    r->axis = q->axis;
+    lsm_spsc_push(&m->pipe.pp_res_idx);
+    lsm_spsc_pop(&m->pipe.pp_req_idx);
+    return true;
+}
+
 bool lsm_motion_background(lsm_motion *m)
 {
+    if (bg_pp(m))
+        return true;
     if (m->path_exec == LSM_MOTION_PATH_EXACT || lsm_spsc_avail(&m->pipe.in_idx) == 0u ||
         lsm_spsc_room(&m->pipe.out_idx, LSM_MPIPE_CAP) == 0u)
         return false;
@@ -579,7 +684,7 @@ void lsm_motion_feedback(lsm_motion *m, lsm_canopen *co, const lsm_real *actual_
         fb.velocity = to_counts(a->actual_vel_mm_s, cpm);
         fb.standstill = axis_at_rest(m, k);
         lsm_cia402_update(ax, &fb, now_us);
-        if (a->pp_running && a->prof.mode == LSM_AXPROF_IDLE && !a->prof.have_after) {
+        if (a->pp_running && !a->pp_wait && a->prof.mode == LSM_AXPROF_IDLE && !a->prof.have_after) {
             a->pp_running = false;
             lsm_cia402_pp_done(ax);
         }

@@ -80,6 +80,7 @@ typedef struct lsm_motion_tk {
     uint32_t rejects_seen; /* refusals passed on to co_path */
     uint32_t abort;        /* path aborts by the tick (underruns while moving) */
     uint32_t sync_gen;     /* axes that entered path mode (their demand goes to the feed) */
+    uint32_t cycle;        /* ticks run */
     bool aborting;         /* the path axes run the tick's abort stop, until the background restarted */
     bool have_last;
     lsm_mpipe_out last;                    /* the last set-point consumed */
@@ -112,6 +113,17 @@ typedef struct lsm_motion_axis {
     uint32_t csp_i, csp_n;               /* cycle within the period, cycles of the period */
     lsm_real actual_mm, actual_vel_mm_s; /* drive feedback of the last cycle */
     uint32_t plan_errors;
+    /* PP move plans in the background (lead_cycles > 0; tick-owned): */
+    bool pp_wait;            /* a plan is requested: the running state goes on until it is taken */
+    bool pp_unsent;          /* ... the request ring was full: post it next cycle */
+    bool pp_from_rest;       /* ... from rest (it stays valid while the axis rests) */
+    bool pp_have;            /* ... its result arrived (pp_res) */
+    uint32_t pp_gen, pp_due; /* its generation, the cycle it starts at */
+    lsm_real pp_target_mm;
+    lsm_axprof_limits pp_lim;
+    lsm_axprof pp_res; /* the planned generator, until pp_due */
+    lsm_status pp_st;  /* lsm_axprof_move's status for it */
+    uint32_t pp_late;  /* plans that came too late for their cycle while moving: requested again */
 } lsm_motion_axis;
 
 typedef struct lsm_motion {

@@ -8,6 +8,10 @@
  *                               the tick's abort count; stamped with the tick's count.
  *   tick -> background   blk    the 0x5010 blocks, taken from the node's co_path buffer by the tick (the node is
  *                               the tick's: canopen.h), each tagged with its co_path epoch.
+ *   tick -> background   pp_req a PP set-point's move plan (lead_cycles > 0): the axis's generator and the
+ *                               set-point; the background steps a copy of the generator to the cycle the move
+ *                               will start at and plans it there (lsm_axprof_move);
+ *   background -> tick   pp_res the planned generator, taken by the tick at that cycle (motion.h);
  *   background -> tick   out    one path set-point per record: every axis's position and velocity, the report
  *                               for lsm_co_path_update, blocks consumed, refusals, the abort count it follows.
  *
@@ -35,6 +39,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "axprof.h"
 #include "co_path.h"
 #include "lsm_atomic.h"
 #include "lsm_config.h"
@@ -45,6 +50,8 @@
 /* Blocks handed over but not yet appended: the planner takes them as it has room; a few are enough (the node's
  * co_path buffer holds the rest and keeps 0x5003 meaningful). Power of two. */
 #define LSM_MPIPE_BLOCKS 4u
+/* PP move plans in flight (requests, results): one per axis, and a stale one each. Power of two. */
+#define LSM_MPIPE_PP 16u
 /* The longest lead: the in ring must hold it and the set-points in flight. */
 #define LSM_MPIPE_LEAD_MAX 48u
 
@@ -121,8 +128,23 @@ typedef struct lsm_mpipe_out {
     bool moving;
 } lsm_mpipe_out;
 
+/* A PP move plan: tick -> background the request (base: the axis's generator as the tick had it when it took the
+ * set-point, to be stepped `steps` cycles, then lsm_axprof_move to target_mm), background -> tick the result (base:
+ * the generator with the planned move, st: lsm_axprof_move's status). gen tells a stale result. */
+typedef struct lsm_mpipe_pp {
+    lsm_axprof base;
+    lsm_axprof_limits lim;
+    lsm_real target_mm;
+    uint32_t gen;
+    uint32_t steps;
+    uint8_t axis;
+    lsm_status st;
+} lsm_mpipe_pp;
+
 typedef struct lsm_mpipe {
-    lsm_spsc in_idx, blk_idx, out_idx;
+    lsm_spsc in_idx, blk_idx, out_idx, pp_req_idx, pp_res_idx;
+    lsm_mpipe_pp pp_req[LSM_MPIPE_PP];
+    lsm_mpipe_pp pp_res[LSM_MPIPE_PP];
     lsm_mpipe_in in[LSM_MPIPE_CAP];
     lsm_mpipe_blk blk[LSM_MPIPE_BLOCKS];
     lsm_mpipe_out out[LSM_MPIPE_CAP];

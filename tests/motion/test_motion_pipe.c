@@ -168,7 +168,7 @@ static void tick(uint32_t n, trace *tr, bool record)
     tr->seq[n] = g_app.co.path.active_seq;
 }
 
-static void boot(void)
+static void boot_mode(int8_t mode, uint32_t lead)
 {
     memset(&g_app, 0, sizeof g_app);
     g_app.next_block = 1u;
@@ -192,7 +192,7 @@ static void boot(void)
     mc.feed.capacity = LA_BLOCKS;
     mc.feed.saved = g_app.la_saved;
     mc.feed.saved_cap = LA_BLOCKS + 1u;
-    mc.lead_cycles = LEAD;
+    mc.lead_cycles = lead;
     assert_int_equal(lsm_motion_init(&g_app.mo, &mc, &g_app.co), LSM_OK);
     lsm_can_frame f;
     const uint8_t start[2] = {0x01, NID};
@@ -201,10 +201,15 @@ static void boot(void)
     memcpy(f.data, start, 2);
     (void)lsm_canopen_rx(&g_app.co, &f, 0u);
     for (unsigned k = 0; k < 3; k++) {
-        set(AX(0x6060, k), 0, -1);
+        set(AX(0x6060, k), 0, mode);
         set(AX(0x6040, k), 0, 0x06);
         set(AX(0x6040, k), 0, 0x0F);
     }
+}
+
+static void boot(void)
+{
+    boot_mode(-1, LEAD);
 }
 
 /* The set-point of tick n exists (the harness's pacing: the firmware's tick never waits). */
@@ -370,6 +375,85 @@ static void test_underrun_stop(void **state)
     assert_int_equal(g_app.mo.tk.underruns, 1);
 }
 
+/* PP with the move plans in the background (lead > 0): a move from rest is the synchronous loop's move, bit for bit,
+ * started MO_PP_PLAN_CYCLES (8) cycles later; a retarget while moving (planned from the state the background
+ * forecasts for its first cycle) ends exactly on the new target. */
+static lsm_real g_pp[2][3000];
+
+static void pp_run(uint32_t lead, lsm_real *out)
+{
+    boot_mode(1, lead);
+    set(AX(0x6081, 0), 0, 100000); /* 100 mm/s, 1000 mm/s², 2e4 mm/s³, 2e6 mm/s⁴ (1000 counts/mm), sin² */
+    set(AX(0x6083, 0), 0, 1000000);
+    set(AX(0x6084, 0), 0, 1000000);
+    set(AX(0x2060, 0), 0, 20000000);
+    set(AX(0x2061, 0), 0, 2000000000);
+    set(AX(0x6086, 0), 0, 1);
+    for (uint32_t n = 0; n < 3000u; n++) {
+        if (n == 10u) {
+            set(AX(0x607A, 0), 0, 40000);
+            set(AX(0x6040, 0), 0, 0x3F);
+        }
+        if (n == 12u)
+            set(AX(0x6040, 0), 0, 0x2F);
+        g_app.now_us += 1000u;
+        (void)lsm_canopen_process(&g_app.co, g_app.now_us);
+        lsm_motion_tick(&g_app.mo, &g_app.co);
+        lsm_motion_feedback(&g_app.mo, &g_app.co, NULL, NULL, g_app.now_us);
+        lsm_can_frame f;
+        while (lsm_canopen_tx_pop(&g_app.co, &f)) {
+        }
+        while (lsm_motion_background(&g_app.mo)) {
+        }
+        out[n] = lsm_motion_demand(&g_app.mo, 0)->s_mm;
+    }
+}
+
+static void test_pp_background(void **state)
+{
+    (void)state;
+    pp_run(0u, g_pp[0]);
+    pp_run(LEAD, g_pp[1]);
+    assert_true(g_pp[0][2000] == 40.0);
+    for (uint32_t n = 0; n + 8u < 3000u; n++) {
+        if (memcmp(&g_pp[0][n], &g_pp[1][n + 8u], sizeof(lsm_real)) != 0)
+            fail_msg("tick %u: %.17g (synchronous) / %.17g (background plan, 8 later)", n, (double)g_pp[0][n],
+                     (double)g_pp[1][n + 8u]);
+    }
+    assert_int_equal(g_app.mo.ax[0].pp_late, 0);
+    /* retarget while moving (single set-point): planned in the background from the forecast state */
+    set(AX(0x607A, 0), 0, 0);
+    set(AX(0x6040, 0), 0, 0x3F);
+    lsm_real prev = lsm_motion_demand(&g_app.mo, 0)->s_mm, vprev = 0;
+    for (uint32_t n = 0; n < 3000u; n++) {
+        if (n == 2u)
+            set(AX(0x6040, 0), 0, 0x2F);
+        if (n == 300u) { /* moving back at speed: retarget to -10 mm */
+            set(AX(0x607A, 0), 0, -10000);
+            set(AX(0x6040, 0), 0, 0x3F);
+        }
+        if (n == 302u)
+            set(AX(0x6040, 0), 0, 0x2F);
+        g_app.now_us += 1000u;
+        (void)lsm_canopen_process(&g_app.co, g_app.now_us);
+        lsm_motion_tick(&g_app.mo, &g_app.co);
+        lsm_motion_feedback(&g_app.mo, &g_app.co, NULL, NULL, g_app.now_us);
+        lsm_can_frame f;
+        while (lsm_canopen_tx_pop(&g_app.co, &f)) {
+        }
+        while (lsm_motion_background(&g_app.mo)) {
+        }
+        const lsm_real p = lsm_motion_demand(&g_app.mo, 0)->s_mm;
+        const lsm_real v = (p - prev) / (lsm_real)0.001;
+        assert_true(fabs((double)v) <= 100.0 * 1.0001);                      /* no jump at the swap */
+        assert_true(fabs((double)(v - vprev)) / 0.001 <= 1000.0 * 1.01 + 1); /* within a */
+        prev = p;
+        vprev = v;
+    }
+    assert_true(lsm_motion_demand(&g_app.mo, 0)->s_mm == -10.0);
+    assert_int_equal(g_app.mo.ax[0].pp_late, 0);
+}
+
 int main(int argc, char **argv)
 {
     g_seed = test_arg_u(argc, argv, 1, 1u);
@@ -381,6 +465,7 @@ int main(int argc, char **argv)
       cmocka_unit_test(test_threads),
 #endif
       cmocka_unit_test(test_underrun_stop),
+      cmocka_unit_test(test_pp_background),
     };
     const int rc = cmocka_run_group_tests(tests, NULL, NULL);
     return test_seed_finish(argv[0], g_seed, g_count, rc);

@@ -214,6 +214,12 @@ static void take_deferred(lsm_axprof *p)
         p->have_after = true;
         return;
     }
+    if (p->plan_outside) { /* the owner plans it (from the present state) */
+        p->after_target_mm = after_target;
+        p->after_lim = after_lim;
+        p->after_due = true;
+        return;
+    }
     (void)lsm_axprof_move(p, after_target, &after_lim);
 }
 
@@ -247,6 +253,11 @@ static void step_stop(lsm_axprof *p)
         return;
     p->mode = LSM_AXPROF_IDLE;
     p->stop_kind = 0;
+    if (p->have_after && p->plan_outside) {
+        p->have_after = false;
+        p->after_due = true;
+        return;
+    }
     if (p->have_after) {
         p->have_after = false;
         const lsm_axprof_limits l = p->after_lim;

@@ -75,6 +75,9 @@ typedef struct lsm_axprof {
     uint8_t defer_kind;         /* deferred stop: its kind */
     lsm_jstop_limits defer_lim; /* deferred stop: its limits */
     bool have_after;            /* a move waits for the end of the stop (retarget), or a deferred retarget */
+    bool plan_outside;          /* set by the owner: the waiting move is not planned inside lsm_axprof_step; at its
+                                   time after_due is raised and the owner plans it (motion.h: in the background) */
+    bool after_due;             /* plan_outside: the waiting move (after_target_mm, after_lim) is due now */
     lsm_real after_target_mm;
     lsm_axprof_limits after_lim;
 } lsm_axprof;

@@ -45,6 +45,7 @@ lsm_status lsm_motion_init(lsm_motion *m, const lsm_motion_config *cfg, lsm_cano
     for (unsigned k = 0; k < cfg->n_axes; k++) {
         m->lim[k] = cfg->lim[k];
         lsm_axprof_init(&m->ax[k].prof, m->cycle_s, 0);
+        m->ax[k].prof.plan_outside = m->lead_cycles > 0u;
         m->ax[k].mode = lsm_canopen_axis(co, k)->mode_display;
     }
     const lsm_real zero[LSM_MAX_AXES] = {0};
@@ -202,6 +203,21 @@ static void pp_take(lsm_motion *m, unsigned k, lsm_canopen *co)
     }
 }
 
+/* The generator's waiting move (the retarget after a stop, or after a jerk pulse) is due: planned in the
+ * background like a set-point, unless a newer set-point's plan is already requested. */
+static void pp_after_due(lsm_motion *m, unsigned k)
+{
+    lsm_motion_axis *a = &m->ax[k];
+    if (!a->prof.after_due)
+        return;
+    a->prof.after_due = false;
+    if (a->pp_wait)
+        return;
+    a->pp_target_mm = a->prof.after_target_mm;
+    a->pp_lim = a->prof.after_lim;
+    pp_post(m, k);
+}
+
 static void axis_pp(lsm_motion *m, unsigned k, lsm_canopen *co, lsm_cia402 *ax)
 {
     lsm_motion_axis *a = &m->ax[k];
@@ -280,9 +296,10 @@ static void axis_step(lsm_motion *m, unsigned k, lsm_canopen *co)
         pp_take(m, k, co);
     else if (a->mode == LSM_CIA402_MODE_CSP)
         axis_csp_fetch(m, k, ax);
-    if (a->prof.mode != LSM_AXPROF_IDLE)
+    if (a->prof.mode != LSM_AXPROF_IDLE) {
         (void)lsm_axprof_step(&a->prof);
-    else if (a->csp_active)
+        pp_after_due(m, k);
+    } else if (a->csp_active)
         axis_csp_step(a);
     else
         a->prof.k.v_mm_s = a->prof.k.a_mm_s2 = a->prof.k.j_mm_s3 = 0;
@@ -392,7 +409,7 @@ static void tick_post(lsm_motion *m, lsm_co_path *cp, const lsm_real *cpm, const
 
 void lsm_motion_tick_begin(lsm_motion *m, lsm_canopen *co)
 {
-    lsm_real cpm[LSM_MAX_AXES], pos[LSM_MAX_AXES];
+    lsm_real cpm[LSM_MAX_AXES] = {0}, pos[LSM_MAX_AXES] = {0};
     m->tk.cycle++;
     pp_collect(m);
     for (unsigned k = 0; k < m->n_axes; k++) {
@@ -594,6 +611,7 @@ static bool bg_pp(lsm_motion *m)
     r->base.gen.mv = &r->base.mv;
     for (uint32_t i = 0; i < q->steps; i++)
         (void)lsm_axprof_step(&r->base);
+    r->base.after_due = false; /* this set-point replaces the move that waited */
     r->st = lsm_axprof_move(&r->base, q->target_mm, &q->lim);
     r->gen = q->gen;
     r->axis = q->axis;

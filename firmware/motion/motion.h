@@ -34,11 +34,13 @@
  * Contexts. Two: the control cycle (tick: an interrupt on the board) and the background (the main loop).
  *   tick        lsm_motion_tick (= _tick_begin + _tick_end), lsm_motion_feedback, lsm_motion_stop_all: the node's
  *               axis objects and path buffer are the tick's (canopen.h: one context per node). Stops, PP, CSP
- *               are evaluated here (a PP set-point's move plan too: lsm_axprof_move, ~40 k instructions on the
- *               M4 per axis); quick stops and E-stops begin in the cycle they are seen in (lsm_axprof_stop_urgent).
- *               For the path it only takes the set-point the background made and reports it.
- *   background  lsm_motion_background: the path feed's planner (pathfeed.h: block appends, lsm_interp_prepare)
- *               and its interpolator, run lead_cycles ahead of the tick; nothing of the node.
+ *               are evaluated here; quick stops and E-stops begin in the cycle they are seen in
+ *               (lsm_axprof_stop_urgent; a stop plan is a bisection, bounded). With lead_cycles > 0 a PP
+ *               set-point's move plan (lsm_axprof_move, 40-250 k instructions on the M4) is the background's: the
+ *               move starts 8 cycles after the set-point is taken (MO_PP_PLAN_CYCLES); with lead 0 the tick plans
+ *               it at once. For the path the tick only takes the set-point the background made and reports it.
+ *   background  lsm_motion_background: PP move plans, then the path feed's planner (pathfeed.h: block appends,
+ *               lsm_interp_prepare) and its interpolator, run lead_cycles ahead of the tick; nothing of the node.
  *   Hand-off: mpipe.h (single-writer rings with release / acquire indices, lock-step, the tick never waits).
  *   Every field of lsm_motion is written by one context: tk and ax[] and path_* by the tick, bg and feed by the
  *   background, pipe per mpipe.h. lsm_motion_cycle runs both halves in one context (synchronous loop).

@@ -254,6 +254,40 @@ static void test_pp_and_estop(void **state)
     assert_int_equal(lsm_canopen_axis(&g_app.co, 0)->state, LSM_CIA402_SWITCH_ON_DISABLED);
 }
 
+/* An E-stop inside a jerk pulse of a PP move (the acceleration still rising) begins in the cycle it is seen in:
+ * the stop releases the jerk at once (jstop.h) instead of waiting for the end of the pulse (up to one acceleration
+ * ramp, axprof.h), so the acceleration falls within the release time pi |j0| / (2 S) (S = 1.18e7 mm/s⁴ of the
+ * machine: under 3 ms here) and the speed stays within what the release adds. */
+static void test_estop_in_jerk_pulse(void **state)
+{
+    (void)state;
+    boot(PATH_PLANNER, 0, 0);
+    enable(0, LSM_CIA402_MODE_PP);
+    pp_profile(0);
+    pp_go(0, 40000);
+    cycles(20, false, 0);
+    const lsm_kin k0 = *lsm_motion_demand(&g_app.mo, 0);
+    assert_true(k0.j_mm_s3 > 1000 && k0.a_mm_s2 > 0 && k0.a_mm_s2 < 1000); /* inside the first jerk pulse */
+    cycles(1, true, 0);
+    assert_int_equal(g_app.mo.ax[0].prof.mode, LSM_AXPROF_STOP);
+    double a_max = 0, v_max = 0;
+    unsigned i_amax = 0;
+    for (unsigned i = 0; i < 200u; i++) {
+        const lsm_kin *d = lsm_motion_demand(&g_app.mo, 0);
+        if (d->a_mm_s2 > a_max) {
+            a_max = d->a_mm_s2;
+            i_amax = i;
+        }
+        v_max = fmax(v_max, d->v_mm_s);
+        cycles(1, true, 0);
+    }
+    assert_true(i_amax <= 3u); /* the acceleration falls from the release on */
+    /* the release adds at most pi j0² / (4 S) to a (jstop.h) */
+    assert_true(a_max <= k0.a_mm_s2 + k0.j_mm_s3 * 0.001 + 3.1416 * k0.j_mm_s3 * k0.j_mm_s3 / (4 * 1.18e7) + 1e-6);
+    assert_true(v_max < k0.v_mm_s + 10.0);
+    assert_true(fabs(lsm_motion_demand(&g_app.mo, 0)->v_mm_s) == 0);
+}
+
 /* Set of set-points (0x6040 bit 5 = 0): the second target waits and starts after the first is reached (a rest
  * at the first target); single set-point (bit 5 = 1): a new target replaces the running move. */
 static void test_pp_setpoints(void **state)
@@ -457,6 +491,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pp_and_estop),
         cmocka_unit_test(test_pp_setpoints),
+        cmocka_unit_test(test_estop_in_jerk_pulse),
         cmocka_unit_test(test_heartbeat_loss_and_busoff),
         cmocka_unit_test(test_path_planner),
         cmocka_unit_test(test_path_exact),

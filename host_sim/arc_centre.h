@@ -13,14 +13,9 @@
 
 static inline void sim_arc_centre_d(const lsm_geom_arc *a, double c[3])
 {
-#if LSM_REAL_IS_FLOAT
     const double cp = cos((double)a->phi0_rad), sp = sin((double)a->phi0_rad);
     for (int i = 0; i < 3; i++)
         c[i] = (double)a->start_mm[i] - (double)a->radius_mm * (cp * (double)a->e1[i] + sp * (double)a->e2[i]);
-#else
-    for (int i = 0; i < 3; i++)
-        c[i] = a->centre_mm[i];
-#endif
 }
 
 #endif

@@ -50,8 +50,9 @@ typedef struct bp_row {
     double rv[2], ra[2], rj[2]; /* largest axis v/a/j over its limit */
     double ns_block, ns_cycle;  /* lissom planner / interpolator */
     double vpop_ns_cycle, vpop_s;
-    double ns_piece;         /* lissom: background piece planning (lsm_interp_prepare) per piece */
-    double isj_max, isj_p99; /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
+    double ns_piece;             /* lissom: background piece planning (lsm_interp_prepare) per piece */
+    double isj_max, isj_p99;     /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
+    double dur_c, cj_c, scale_c; /* vpop-cont (pathrun.h): duration, its continuous jerk / J, its jerk scale; -1 n/a */
 } bp_row;
 
 static double bp_now(void)
@@ -93,22 +94,30 @@ static int bp_program(const char *root, const bp_case *c, bp_row *row)
     memset(row, 0, sizeof *row);
     row->name = c->name;
     row->has_lissom = 1;
-    for (int k = 0; k < 2; k++) {
+    row->dur_c = row->cj_c = row->scale_c = -1;
+    for (int k = 0; k < 3; k++) {
         sim_run_opts o;
         memset(&o, 0, sizeof o);
         o.machine = &m;
         o.text = text;
         o.len = len;
-        o.planner = k ? SIM_RUN_VPOP : SIM_RUN_LISSOM;
+        o.planner = k == 2 ? SIM_RUN_VPOP_CONT : k ? SIM_RUN_VPOP : SIM_RUN_LISSOM;
         sim_run_result r;
         const double t0 = bp_now();
         if (sim_run_program(&o, &r) != 0) {
-            fprintf(stderr, "error: %s (%s): %s\n", c->program, k ? "vpop" : "lissom", r.err);
+            fprintf(stderr, "error: %s (%s): %s\n", c->program, sim_run_planner_name(o.planner), r.err);
             sim_run_free(&r);
             free(text);
             return -1;
         }
         const double wall = bp_now() - t0;
+        if (k == 2) {
+            row->dur_c = r.duration_s;
+            row->cj_c = r.cont_jerk_max;
+            row->scale_c = r.vpop_jerk_scale;
+            sim_run_free(&r);
+            continue;
+        }
         row->dur[k] = r.duration_s;
         bp_ratios(&m, r.max_v, r.max_a, r.max_j, &row->rv[k], &row->ra[k], &row->rj[k]);
         if (k == 0) {
@@ -200,6 +209,7 @@ static int bp_bspline(const char *root, int refine, const char *out, bp_row *row
     row->vpop_s = wall;
     row->vpop_ns_cycle = n ? 1e9 * wall / (double)n : 0;
     row->isj_max = row->isj_p99 = -1; /* (not measured on the spline) */
+    row->dur_c = row->cj_c = row->scale_c = -1;
     free(S);
     sim_bspline_free(&b);
     return 0;
@@ -304,32 +314,56 @@ int cmd_bench_planner(int argc, char **argv)
                 printf("}");
             }
             printf("}");
+            if (r->dur_c > 0) {
+                printf(", \"vpop_cont\": {\"duration\": ");
+                json_num(stdout, r->dur_c);
+                printf(", \"continuous_jerk_ratio\": ");
+                json_num(stdout, r->cj_c);
+                printf(", \"jerk_scale\": ");
+                json_num(stdout, r->scale_c);
+                printf("}");
+            }
             if (r->has_lissom) {
                 printf(", \"ratio\": ");
                 json_num(stdout, r->dur[0] / r->dur[1]);
+                if (r->dur_c > 0) {
+                    printf(", \"ratio_cont\": ");
+                    json_num(stdout, r->dur[0] / r->dur_c);
+                }
             }
             printf("}");
         }
         printf("\n  ]\n}\n");
         return 0;
     }
-    printf("%-16s %9s %9s %6s  %-17s  %-17s  %11s  %9s %9s %10s %9s\n", "case", "lissom s", "vpop s", "ratio",
-           "lissom v/a/j", "vpop v/a/j", "vpop isj", "ns/block", "ns/cycle", "ns/piece", "vpop s");
+    printf("%-16s %9s %9s %6s %9s %6s %5s  %-17s  %-17s  %11s  %9s %9s %10s %9s\n", "case", "lissom s", "vpop s",
+           "ratio", "vpop-c s", "ratio", "scale", "lissom v/a/j", "vpop v/a/j", "vpop isj", "ns/block", "ns/cycle",
+           "ns/piece", "vpop s");
     for (int i = 0; i < nr; i++) {
         const bp_row *r = &rows[i];
-        char isj[32] = "-";
+        char isj[32] = "-", cs[16] = "-", cr[16] = "-", sc[16] = "-";
         if (r->isj_max >= 0)
             snprintf(isj, sizeof isj, "%.2f/%.2f", r->isj_max, r->isj_p99);
+        if (r->dur_c > 0) {
+            snprintf(cs, sizeof cs, "%.3f", r->dur_c);
+            snprintf(cr, sizeof cr, "%.3f", r->dur[0] / r->dur_c);
+            snprintf(sc, sizeof sc, "%.2f", r->scale_c);
+        }
         if (r->has_lissom)
-            printf("%-16s %9.3f %9.3f %6.3f  %5.3f/%5.3f/%5.3f  %5.3f/%5.3f/%5.3f  %11s  %9.0f %9.0f %10.0f %9.3f\n",
-                   r->name, r->dur[0], r->dur[1], r->dur[0] / r->dur[1], r->rv[0], r->ra[0], r->rj[0], r->rv[1],
-                   r->ra[1], r->rj[1], isj, r->ns_block, r->ns_cycle, r->ns_piece, r->vpop_s);
+            printf("%-16s %9.3f %9.3f %6.3f %9s %6s %5s  %5.3f/%5.3f/%5.3f  %5.3f/%5.3f/%5.3f  %11s  %9.0f %9.0f "
+                   "%10.0f "
+                   "%9.3f\n",
+                   r->name, r->dur[0], r->dur[1], r->dur[0] / r->dur[1], cs, cr, sc, r->rv[0], r->ra[0], r->rj[0],
+                   r->rv[1], r->ra[1], r->rj[1], isj, r->ns_block, r->ns_cycle, r->ns_piece, r->vpop_s);
         else
-            printf("%-16s %9s %9.3f %6s  %17s  %5.3f/%5.3f/%5.3f  %11s  %9s %9s %10s %9.3f\n", r->name, "-", r->dur[1],
-                   "-", "-", r->rv[1], r->ra[1], r->rj[1], isj, "-", "-", "-", r->vpop_s);
+            printf("%-16s %9s %9.3f %6s %9s %6s %5s  %17s  %5.3f/%5.3f/%5.3f  %11s  %9s %9s %10s %9.3f\n", r->name, "-",
+                   r->dur[1], "-", "-", "-", "-", "-", r->rv[1], r->ra[1], r->rj[1], isj, "-", "-", "-", r->vpop_s);
     }
     printf(
         "\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
-        "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n");
+        "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n"
+        "vpop-c: VPOp held to its jerk limits continuously (its jerk limits scaled by `scale`, the largest factor for "
+        "which its own continuous axis jerk, eq 3 at and halfway between its samples, stays <= J); ratio = lissom / "
+        "vpop-c.\n");
     return 0;
 }

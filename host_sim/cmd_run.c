@@ -67,7 +67,7 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
 {
     const sim_machine *m = o->machine;
     fprintf(f, "{\n  \"program\": \"%s\",\n  \"machine\": \"%s\",\n  \"planner\": \"%s\",\n", program, machine,
-            o->planner == SIM_RUN_VPOP ? "vpop" : "lissom");
+            sim_run_planner_name(o->planner));
     fprintf(f, "  \"duration\": ");
     json_num(f, r->duration_s);
     fprintf(f, ",\n  \"cycles\": %llu,\n  \"cycle_s\": ", (unsigned long long)r->cycles);
@@ -124,6 +124,13 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         fprintf(f, ", \"p99\": ");
         json_num(f, r->intersample_jerk_p99);
         fprintf(f, "},\n");
+    }
+    if (o->planner == SIM_RUN_VPOP_CONT) {
+        fprintf(f, "  \"continuous_jerk_ratio\": ");
+        json_num(f, r->cont_jerk_max);
+        fprintf(f, ",\n  \"vpop_jerk_scale\": ");
+        json_num(f, r->vpop_jerk_scale);
+        fprintf(f, ",\n");
     }
     fprintf(f,
             "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "
@@ -257,8 +264,10 @@ int cmd_run(int argc, char **argv)
         o.planner = SIM_RUN_LISSOM;
     else if (strcmp(planner, "vpop") == 0)
         o.planner = SIM_RUN_VPOP;
+    else if (strcmp(planner, "vpop-cont") == 0)
+        o.planner = SIM_RUN_VPOP_CONT;
     else {
-        fprintf(stderr, "error: --planner must be lissom or vpop\n");
+        fprintf(stderr, "error: --planner must be lissom, vpop or vpop-cont\n");
         return 2;
     }
     if (!(ovr > 0 && ovr <= 2)) {
@@ -326,8 +335,7 @@ int cmd_run(int argc, char **argv)
         print_summary(stdout, &o, &r, program, machine);
     } else {
         printf("%s on %s (%s): %.4f s, %llu cycles, max deviation %.6f mm, end error %.3g\n", program, m.name,
-               o.planner == SIM_RUN_VPOP ? "vpop" : "lissom", r.duration_s, (unsigned long long)r.cycles, r.max_dev_mm,
-               r.end_error);
+               sim_run_planner_name(o.planner), r.duration_s, (unsigned long long)r.cycles, r.max_dev_mm, r.end_error);
         for (int i = 0; i < r.n_axes; i++) {
             const int ax = r.axis_index[i];
             printf("  %c: v %.6g / %.6g  a %.6g / %.6g  j %.6g / %.6g\n", r.axis_name[i], r.max_v[ax],

@@ -913,6 +913,71 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
     free(ratio);
 }
 
+/* max_i |d³q_i/dt³| / J_i of the motion at path point s with s' = v, s'' = a, s''' = j (Beudaert eq 3; the geometry
+ * as in vpop_intersample), against the limits lim. */
+static double vp_jerk_ratio(const gpath *gp, const sim_vpop_limits *lim, double s, double v, double a, double j)
+{
+    size_t lo = 0, hi = gp->n;
+    while (hi - lo > 1) {
+        const size_t mid = (lo + hi) / 2;
+        if (gp->s0[mid] <= s)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    const lsm_geom *g = &gp->g[lo];
+    const double len = (double)g->len, u = fmin(len, fmax(0, s - gp->s0[lo]));
+    lsm_real pos[LSM_MAX_AXES] = {0}, t[3], c[3], c1[3], c2[3];
+    lsm_geom_eval(g, (lsm_real)u, pos, t, c);
+    double q3[3] = {0, 0, 0};
+    if (g->kind != LSM_GEOM_LINE) {
+        const double h = fmin(1e-4, 0.25 * len);
+        const double ua = fmax(0, u - h), ub = fmin(len, u + h);
+        lsm_geom_eval(g, (lsm_real)ua, pos, NULL, c1);
+        lsm_geom_eval(g, (lsm_real)ub, pos, NULL, c2);
+        for (int i = 0; i < 3; i++)
+            q3[i] = ub > ua ? ((double)c2[i] - (double)c1[i]) / (ub - ua) : 0;
+    }
+    double worst = 0;
+    for (int i = 0; i < 3; i++) {
+        if (!(lim->axis_mask & (1u << i)) || !(lim->j[i] > 0))
+            continue;
+        const double qs = g->kind == LSM_GEOM_LINE ? (double)g->u.line.dir[i] : (double)t[i];
+        worst = fmax(worst, fabs(qs * j + 3 * (double)c[i] * v * a + q3[i] * v * v * v) / lim->j[i]);
+    }
+    return worst;
+}
+
+/*
+ * The continuous axis jerk of VPOp's motion over the limit, largest over the samples and the points halfway between
+ * them. The motion between samples is the cubic through the four samples around the point (at rest before the first
+ * and after the last sample): at a sample, s', s'', s''' are the central differences of vpop_intersample; halfway
+ * between samples k and k+1, with S_-1 .. S_2 the samples k-1 .. k+2,
+ *     s = (-S_-1 + 9 S_0 + 9 S_1 - S_2) / 16,   s' = (S_-1 - 27 S_0 + 27 S_1 - S_2) / (24 dt),
+ *     s'' = (S_-1 - S_0 - S_1 + S_2) / (2 dt²),  s''' = (S_2 - 3 S_1 + 3 S_0 - S_-1) / dt³.
+ */
+static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt)
+{
+    if (n == 0)
+        return 0;
+    double worst = 0;
+    for (long k = -2; k <= (long)n + 1; k++) {
+        double w[5]; /* S_k-2 .. S_k+2, at rest outside the samples */
+        for (int d = 0; d < 5; d++) {
+            const long i = k - 2 + d;
+            w[d] = S[i < 0 ? 0 : i >= (long)n ? (long)n - 1 : i];
+        }
+        const double sm2 = w[0], sm1 = w[1], s0 = w[2], s1 = w[3], s2 = w[4];
+        const double v = (s1 - sm1) / (2 * dt), a = (s1 - 2 * s0 + sm1) / (dt * dt);
+        const double j = (s2 - 2 * s1 + 2 * sm1 - sm2) / (2 * dt * dt * dt);
+        worst = fmax(worst, vp_jerk_ratio(gp, lim, s0, v, a, j));
+        const double sh = (-sm1 + 9 * s0 + 9 * s1 - s2) / 16, vh = (sm1 - 27 * s0 + 27 * s1 - s2) / (24 * dt);
+        const double ah = (sm1 - s0 - s1 + s2) / (2 * dt * dt), jh = (s2 - 3 * s1 + 3 * s0 - sm1) / (dt * dt * dt);
+        worst = fmax(worst, vp_jerk_ratio(gp, lim, sh, vh, ah, jh));
+    }
+    return worst;
+}
+
 /* The Hermite table of the path (gpath). */
 #define VP_TAB_STEP_MM 0.004         /* node spacing: the table is within 6e-10 mm of the exact clothoids */
 #define VP_TAB_MAX_NODES 2e6         /* coarser steps on long paths, so that the table stays about 2e6 nodes */
@@ -1060,6 +1125,50 @@ static void vp_best_motion(const sim_run_opts *o, const sim_vpop_path *path, sim
     }
 }
 
+/* VPOp held to its jerk limits continuously (pathrun.h: SIM_RUN_VPOP_CONT): its jerk limits scaled by the largest
+ * factor sigma (bisection) for which vpop_cont_max of its motion against the unscaled limits is <= 1. Only the jerk is
+ * scaled: v and a hold on the samples and are not what leaves the limits between them. */
+#define VP_CONT_ITERS 12       /* at most this many VPOp runs */
+#define VP_CONT_SIGMA_MIN 0.05 /* below this the motion is not a useful reference: give up (no motion) */
+#define VP_CONT_REL 0.01       /* sigma to 1 % of its bracket */
+#define VP_CONT_TOL 1e-9       /* relative: rounding of the differences */
+static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path, const gpath *gp, sim_vpop_limits *lim,
+                           double cycle_s, double **S, size_t *n, sim_run_result *r)
+{
+    const sim_vpop_limits base = *lim;
+    double lo = 0, hi = 1, sigma = 1;
+    *S = NULL;
+    *n = 0;
+    for (int it = 0; it < VP_CONT_ITERS; it++) {
+        for (int i = 0; i < SIM_VPOP_AXES; i++)
+            lim->j[i] = base.j[i] * sigma;
+        double *S2 = NULL;
+        size_t n2 = 0;
+        vp_best_motion(o, path, lim, cycle_s, &S2, &n2);
+        const int ok = S2 && vpop_cont_max(gp, &base, S2, n2, cycle_s) <= 1 + VP_CONT_TOL;
+        if (ok) {
+            free(*S);
+            *S = S2;
+            *n = n2;
+            lo = sigma;
+            r->vpop_jerk_scale = sigma;
+        } else {
+            free(S2);
+            hi = sigma;
+        }
+        if (lo == hi || (lo > 0 && hi - lo < VP_CONT_REL * hi))
+            break;
+        if (lo == 0) { /* nothing holds yet: halve */
+            if (sigma < VP_CONT_SIGMA_MIN)
+                break;
+            sigma *= 0.5;
+        } else {
+            sigma = 0.5 * (lo + hi);
+        }
+    }
+    *lim = base;
+}
+
 /* The samples as setpoints (the last one exactly the programmed end), with feed and block sequence number. */
 static int vp_record(gpath *gp, const lsm_planner *pl, const double *S, size_t n, double cycle_s, rec *out,
                      sim_run_result *r)
@@ -1128,7 +1237,10 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
     }
     size_t n = 0;
     const double t0 = now_ns();
-    vp_best_motion(o, &path, &lim, cfg.cycle_s, &S, &n);
+    if (o->planner == SIM_RUN_VPOP_CONT)
+        vp_cont_motion(o, &path, &gp, &lim, cfg.cycle_s, &S, &n, r);
+    else
+        vp_best_motion(o, &path, &lim, cfg.cycle_s, &S, &n);
     if (!S) {
         snprintf(r->err, sizeof r->err, "vpop: no motion found");
         goto done;
@@ -1137,6 +1249,9 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
     if (vp_record(&gp, pl, S, n, cfg.cycle_s, out, r) != 0)
         goto done;
     vpop_intersample(&gp, &lim, S, n, cfg.cycle_s, r);
+    r->cont_jerk_max = vpop_cont_max(&gp, &lim, S, n, cfg.cycle_s);
+    if (o->planner != SIM_RUN_VPOP_CONT)
+        r->vpop_jerk_scale = 1;
     r->cycles = n;
     r->duration_s = (double)n * cfg.cycle_s;
     r->stats = pl->stats;
@@ -1161,6 +1276,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     memset(r, 0, sizeof *r);
     r->pl_block_bytes = (uint32_t)sizeof(lsm_pblock);
     r->intersample_jerk_max = r->intersample_jerk_p99 = -1;
+    r->cont_jerk_max = r->vpop_jerk_scale = -1;
     const sim_machine *m = o->machine;
     r->cycle_s = m->cycle_s;
     r->n_axes = m->n_axes;
@@ -1194,7 +1310,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     rec out = {0};
     out.stream = o->summary_only ? &mt : NULL;
     int rc;
-    if (o->planner == SIM_RUN_VPOP)
+    if (o->planner != SIM_RUN_LISSOM)
         rc = run_vpop(o, &p, &out, r);
     else
         rc = run_lissom(o, &p, &out, r);
@@ -1202,7 +1318,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     r->n_mfuncs = p.n_ev;
     p.ev = NULL;
     p.n_ev = 0;
-    for (size_t i = 0; i < r->n_mfuncs && rc == 0 && o->planner != SIM_RUN_VPOP; i++)
+    for (size_t i = 0; i < r->n_mfuncs && rc == 0 && o->planner == SIM_RUN_LISSOM; i++)
         if (r->mfuncs[i].ev.kind == LSM_GCODE_EV_END)
             r->mfuncs[i].t_s = r->duration_s;
     if (rc != 0) {

@@ -231,13 +231,9 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->reserved = 0;
     const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
-#if LSM_REAL_IS_FLOAT
         g->u.arc.start_mm[i] = start[i];
         (void)cshift;
         (void)ns;
-#else
-        g->u.arc.centre_mm[i] = centre[i] + cshift[i] + ns * n[i];
-#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -283,16 +279,10 @@ lsm_status lsm_geom_arc_init_general(lsm_geom *g, const lsm_real centre[3], cons
     g->plane = LSM_GEOM_PLANE_GENERAL;
     g->rotary_only = 0;
     g->reserved = 0;
-#if LSM_REAL_IS_FLOAT
     lsm_real sp, cp;
     lsm_sincos(phi0_rad, &sp, &cp);
-#endif
     for (int i = 0; i < 3; i++) {
-#if LSM_REAL_IS_FLOAT
         g->u.arc.start_mm[i] = centre[i] + radius_mm * (cp * e1[i] + sp * e2[i]);
-#else
-        g->u.arc.centre_mm[i] = centre[i];
-#endif
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -340,7 +330,6 @@ static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3])
     cross3(a->e1, a->e2, n);
 }
 
-#if LSM_REAL_IS_FLOAT
 /* The in-plane chord from the start to the angle phi0 + dphi: 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 +
  * cos(phi0 + dphi/2) e2), to a few ulp of its length. */
 static void geom_arc_chord(const lsm_geom_arc *a, lsm_real dphi, lsm_real c[3])
@@ -354,20 +343,14 @@ static void geom_arc_chord(const lsm_geom_arc *a, lsm_real dphi, lsm_real c[3])
         c[i] = k * (cm * a->e2[i] - sm * a->e1[i]);
     (void)ch;
 }
-#endif
 
 void lsm_geom_arc_centre(const lsm_geom *g, lsm_real c[3])
 {
     const lsm_geom_arc *a = &g->u.arc;
-#if LSM_REAL_IS_FLOAT
     lsm_real sp, cp;
     lsm_sincos(a->phi0_rad, &sp, &cp);
     for (int i = 0; i < 3; i++)
         c[i] = a->start_mm[i] - a->radius_mm * (cp * a->e1[i] + sp * a->e2[i]);
-#else
-    for (int i = 0; i < 3; i++)
-        c[i] = a->centre_mm[i];
-#endif
 }
 
 lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXES], lsm_real tan[3], lsm_real curv[3])
@@ -398,30 +381,19 @@ lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXE
         const lsm_geom_arc *a = &g->u.arc;
         const lsm_real f = s / g->len;
         const lsm_real phi = a->phi0_rad + a->sweep_rad * f;
-#if LSM_REAL_IS_FLOAT
         lsm_real co = LSM_R(0.0), si = LSM_R(0.0);
         if (tan || curv) /* (the position comes from the chord) */
             lsm_sincos(phi, &si, &co);
-#else
-        const lsm_real co = lsm_cos(phi), si = lsm_sin(phi);
-#endif
         lsm_real n[3];
         geom_arc_normal(a, n);
         const lsm_real w = a->sweep_rad / g->len; /* dphi/ds */
-#if LSM_REAL_IS_FLOAT
         lsm_real chord[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
         if (pos)
             geom_arc_chord(a, a->sweep_rad * f, chord);
-#endif
         for (int i = 0; i < 3; i++) {
             const lsm_real radial = co * a->e1[i] + si * a->e2[i];
-#if LSM_REAL_IS_FLOAT
             if (pos)
                 pos[i] = a->start_mm[i] + chord[i] + n[i] * a->axial_mm * f;
-#else
-            if (pos)
-                pos[i] = a->centre_mm[i] + a->radius_mm * radial + n[i] * a->axial_mm * f;
-#endif
             if (tan)
                 tan[i] = w * a->radius_mm * (-si * a->e1[i] + co * a->e2[i]) + n[i] * a->axial_mm / g->len;
             if (curv)
@@ -515,15 +487,10 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
         const lsm_real f = d / g->len;
         lsm_real n[3];
         geom_arc_normal(a, n);
-#if LSM_REAL_IS_FLOAT
         lsm_real p[LSM_MAX_AXES] = {0};
         (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
         for (int i = 0; i < 3; i++)
             a->start_mm[i] = p[i];
-#else
-        for (int i = 0; i < 3; i++)
-            a->centre_mm[i] += n[i] * a->axial_mm * f;
-#endif
         a->phi0_rad += a->sweep_rad * f;
         a->sweep_rad -= a->sweep_rad * f;
         a->axial_mm -= a->axial_mm * f;

@@ -54,11 +54,9 @@ typedef struct lsm_geom_line {
 } lsm_geom_line;
 
 typedef struct lsm_geom_arc {
-#if LSM_REAL_IS_FLOAT
-    lsm_real start_mm[3]; /* the start point (exactly the programmed start of a G2/G3) */
-#else
-    lsm_real centre_mm[3]; /* its coordinate along n is the start point's */
-#endif
+    /* the start point (exactly the programmed start of a G2/G3): the arc is evaluated by its chord from there, so
+     * its rounding is that of the coordinates, not of the radius (a centre 1e5 mm away adds ulp(1e5) of noise) */
+    lsm_real start_mm[3];
     lsm_real e1[3], e2[3]; /* orthonormal plane basis */
     lsm_real radius_mm;
     lsm_real phi0_rad;  /* start angle */

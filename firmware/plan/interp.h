@@ -14,10 +14,10 @@
  *      cycles): four trigonometric calls per ramp, none per cycle. It takes the difference ds from the previous
  *      sample (small numbers: no cancellation in float);
  *   2. moves the path cursor (block, offset) by ds and evaluates the block there: a line directly (p0 + dir s),
- *      an arc by rotating (cos phi, sin phi) by w ds with a short polynomial (re-anchored on entry and every 256
- *      cycles), a clothoid with the incremental stepper of clothoid.h (lsm_clothoid_step).
- *      Float build (the Cortex-M4F): an arc is evaluated from an anchor point P_a on it (exact: lsm_geom_eval from
- *      the arc's start point, geom.h) by its chord to the cursor, with d = w (s - s_a),
+ *      an arc from an anchor point P_a on it, a clothoid with the incremental stepper of clothoid.h
+ *      (lsm_clothoid_step). An arc (both builds; the double build used c + r u(phi), whose rounding, ulp(r), was
+ *      noise on every setpoint: 0.15 % of a 1942 mm/s³ jerk limit on an R 96160 arc at 0.5 ms): P_a is exact
+ *      (lsm_geom_eval from the arc's start point, geom.h), and the cursor is reached by the chord, d = w (s - s_a),
  *        p = P_a + (cos d - 1) A + sin d B + L (s - s_a),   A = r u(phi_a), B = r u'(phi_a),
  *      (cos d - 1 and sin d by short polynomials, no cancellation), so a setpoint is off by a few ulp of the
  *      coordinates, whatever the radius (c + r u(phi) with a float centre c is off by ulp(r): 5e-4 mm at
@@ -143,20 +143,20 @@ typedef struct lsm_interp {
     uint32_t hz_blk;    /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
     lsm_real hz_v;                           /* speed there (a = 0) */
-    lsm_real ac, as, aw;                     /* arc: cos phi, sin phi, dphi/ds */
-    lsm_real a_p[3], a_A[3], a_B[3], a_L[3]; /* float arc anchor: P_a, A, B, L (above) */
-    lsm_real a_off;                          /* float arc anchor: its offset s_a in the block */
-    lsm_real a_len;             /* float arc: the block's length when the anchor was set (a trim re-anchors) */
-    lsm_clothoid_stepper cs;    /* clothoid stepper */
-    lsm_real pos[LSM_MAX_AXES]; /* last setpoint */
-    lsm_real ovr;               /* requested override factor */
-    uint64_t cycles;            /* cycles stepped */
-    uint32_t replans;           /* pieces taken while moving (replanning) */
-    uint32_t plan_errors;       /* plan_piece calls that returned an error */
-    uint32_t serial;            /* pieces started */
-    uint32_t lead_cycles;       /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
-    uint32_t tick_plans;        /* pieces planned inside lsm_interp_step (none were prepared) */
-    uint8_t bg;                 /* lsm_interp_prepare is in use: the cycle plans only what it must */
+    lsm_real aw;                             /* arc: dphi/ds */
+    lsm_real a_p[3], a_A[3], a_B[3], a_L[3]; /* arc anchor: P_a, A, B, L (above) */
+    lsm_real a_off;                          /* arc anchor: its offset s_a in the block */
+    lsm_real a_len;                          /* arc: the block's length when the anchor was set (a trim re-anchors) */
+    lsm_clothoid_stepper cs;                 /* clothoid stepper */
+    lsm_real pos[LSM_MAX_AXES];              /* last setpoint */
+    lsm_real ovr;                            /* requested override factor */
+    uint64_t cycles;                         /* cycles stepped */
+    uint32_t replans;                        /* pieces taken while moving (replanning) */
+    uint32_t plan_errors;                    /* plan_piece calls that returned an error */
+    uint32_t serial;                         /* pieces started */
+    uint32_t lead_cycles;    /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
+    uint32_t tick_plans;     /* pieces planned inside lsm_interp_step (none were prepared) */
+    uint8_t bg;              /* lsm_interp_prepare is in use: the cycle plans only what it must */
     uint8_t hz_posted_phase; /* the phase of the current piece whose horizon was posted whole (HZ_NOT_POSTED: none) */
     uint8_t reserved2[2];
     uint32_t prepared;    /* pieces planned by lsm_interp_prepare */

@@ -437,8 +437,9 @@ static int check_end(const run_res *r, const char *what, long c)
     return 0;
 }
 
-static void dump(const text *t, const machine *m)
+static void dump(const text *t, const machine *m, const double at[3], uint32_t capacity)
 {
+    print_message("start %.17g %.17g %.17g, capacity %u\n", at[0], at[1], at[2], capacity);
     print_message("machine: cycle %g s, v %g %g %g, a %g %g %g, j %g %g %g, snap %g %g %g\n", m->cycle_s, m->v[0],
                   m->v[1], m->v[2], m->a[0], m->a[1], m->a[2], m->j[0], m->j[1], m->j[2], m->snap[0], m->snap[1],
                   m->snap[2]);
@@ -481,7 +482,7 @@ static void scenario(int kind, const char *name)
             bad = 1;
         }
         if (bad) {
-            dump(&t, &m);
+            dump(&t, &m, at, capacity);
             failed++;
         } else {
             ok++;
@@ -547,6 +548,23 @@ static void test_golden(void **state)
     machine router = {0.001, {250, 250, 100}, {3000, 3000, 1500}, {60000, 60000, 30000}, {1.18e7, 1.18e7, 5.9e6}, 0.02};
     golden("G1 X13.5 Y12.5 F1200\nG3 X11 Y10 R10000\nM2\n", &router, z, "R 10000, router");
     golden("G1 Y2 F10\nG3 Y0 R1000\nM2\n", &router, z, "R 1000 back to 0, router");
+    /* large radius 190 of seed 3 (double): Z jerk 1945.36 > 1942.45 on the R 96160 arc, from the double build's
+     * centre form c + r u(phi), whose rounding (ulp(r)) is noise on every setpoint; arcs are evaluated from their
+     * start point and anchors now, in both builds (geom.h, interp.h) */
+    machine slow_z = {0.0005,
+                      {155.747, 95.4639, 73.6592},
+                      {12495.2, 380.07, 188.778},
+                      {36904.5, 573636, 1942.45},
+                      {4.66142e+06, 2.84026e+08, 582734},
+                      0.02};
+    const double at190[3] = {-63.653514288769024, 41.772048908517569, -39.322184881422274};
+    golden("G21 G90 G17\nG64 P0.0183\nG18\nG3 X-63.5901 Y41.7720 Z-37.0194 R5503.3462 F3843.4\n"
+           "G2 X-63.4535 Y41.7720 Z-36.9941 R44.9284 F1648.0\nG1 X-64.3146 Y44.0535 Z-40.7079 F267.0\n"
+           "G3 X-63.4129 Y44.0535 Z-40.1086 R10.3014 F6307.9\nG1 X-63.4170 Y44.0318 Z-40.1184 F978.6\n"
+           "G2 X-63.4146 Y44.0318 Z-40.2440 R11831.9602 F26775.7\nG2 X-63.4722 Y44.0318 Z-41.6539 R308.5003 F646.2\n"
+           "G3 X-63.1209 Y44.0318 Z-41.0913 R96159.6909 F40446.3\nG1 X-63.0777 Y43.9190 Z-41.0913 F35677.6\n"
+           "G3 X-63.1991 Y43.9190 Z-41.1601 R24.4002 F233.7\nM2\n",
+           &slow_z, at190, "large radius 190 of seed 3, slow Z, 0.5 ms");
 }
 
 int main(int argc, char **argv)

@@ -134,14 +134,43 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
     return false;
 }
 
+/* The fallback's cruise-feed candidates (see single_plan). */
+#define ALT_ABOVE 4  /* peaks between vp* and v_max */
+#define ALT_GRID 32  /* an even grid of feeds from max(v0, v1) down to 0 */
+#define ALT_NEAR 24  /* per end feed, feeds 2^-1 .. 2^-24 of the way from it to the other end feed or to 0 */
+#define ALT_PEAKS (ALT_ABOVE + ALT_GRID + 4 * ALT_NEAR)
+
+/* Candidate k of the fallback: a cruise feed in [0, v_max]. */
+static lsm_real alt_peak(int k, lsm_real vp, lsm_real v0, lsm_real v1, lsm_real vmax)
+{
+    static const lsm_real up[ALT_ABOVE] = {LSM_R(0.03125), LSM_R(0.125), LSM_R(0.5), LSM_R(1.0)};
+    if (k < ALT_ABOVE)
+        return vp + (vmax - vp) * up[k];
+    k -= ALT_ABOVE;
+    const lsm_real vtop = lsm_max2(v0, v1);
+    if (k < ALT_GRID)
+        return vtop * (lsm_real)(ALT_GRID - 1 - k) / ALT_GRID;
+    k -= ALT_GRID;
+    /* close to an end feed e, towards the other end feed o or towards 0: a cruise that lingers near the start or
+     * end feed (the quantised ramp between them then absorbs the distance the direct ramp leaves over) */
+    const int which = k / ALT_NEAR, step = k % ALT_NEAR + 1;
+    const lsm_real e = (which & 1) ? v1 : v0;
+    const lsm_real o = (which & 2) ? 0 : ((which & 1) ? v0 : v1);
+    lsm_real f = 1;
+    for (int i = 0; i < step; i++)
+        f /= 2; /* exact powers of two */
+    return e + (o - e) * f;
+}
+
 /*
  * One axis alone, strict rule: the fastest whole-cycle shape that lands exactly on D. Tries the minimal-time
- * peak vp* first (the usual answer), then peaks above it (ramps with more velocity capacity, for short moves
- * between non-zero feeds whose remainder of a cycle a short ramp cannot absorb), then cruise feeds between
- * and below the end feeds, each also with its ramps stretched at T4 (more capacity for a little more time);
- * keeps the shortest that fits.
+ * peak vp* first (the usual answer). Otherwise (short moves between feeds whose remainder a quantised ramp
+ * cannot absorb) it tries other cruise feeds: peaks above vp* (ramps with more velocity capacity), an even grid
+ * below max(v0, v1), and feeds geometrically close to each end feed (a cruise lingering just above or below v0
+ * or v1, the only exact shapes when D exceeds the direct ramp's distance by less than a short ramp travels at
+ * the far feed), each also with its ramps stretched at T4 (more capacity for a little more time); keeps the
+ * shortest that fits.
  */
-#define ALT_PEAKS 36
 static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
 {
     lsm_real vp;
@@ -150,13 +179,11 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
         return st;
     if (window_nc(L, dt, D, v0, v1, best))
         return LSM_OK;
-    const lsm_real vtop = lsm_max2(v0, v1), vmax = L->v_max_mm_s;
-    static const lsm_real up[4] = {LSM_R(0.03125), LSM_R(0.125), LSM_R(0.5), LSM_R(1.0)};
     uint64_t best_total = UINT64_MAX;
     /* a ramp lengthened at T4 gains velocity capacity linearly, at a small cost in time */
     static const uint32_t stretch[4] = {0, 2, 8, 32};
     for (int k = 0; k < ALT_PEAKS; k++) {
-        const lsm_real p = k < 4 ? vp + (vmax - vp) * up[k] : vtop * (lsm_real)(ALT_PEAKS - 1 - k) / (ALT_PEAKS - 4);
+        const lsm_real p = alt_peak(k, vp, v0, v1, L->v_max_mm_s);
         shape base;
         if (!ramp(L, dt, p - v0, LSM_SCURVE_RULE_STRICT, &base.acc) ||
             !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
@@ -178,8 +205,6 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
                 }
             }
         }
-        if (best_total < UINT64_MAX && k >= 3)
-            break; /* the peaks above vp* are tried in full; below them, the first (highest) that fits wins */
     }
     return best_total < UINT64_MAX ? LSM_OK : LSM_E_INFEASIBLE;
 }

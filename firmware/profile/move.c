@@ -178,9 +178,9 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
 }
 
 /* The fallback's cruise-feed candidates (see single_plan). */
-#define ALT_ABOVE 4  /* peaks between vp* and v_max */
-#define ALT_GRID 32  /* an even grid of feeds from max(v0, v1) down to 0 */
-#define ALT_NEAR 24  /* per end feed, feeds 2^-1 .. 2^-24 of the way from it to the other end feed or to 0 */
+#define ALT_ABOVE 4 /* peaks between vp* and v_max */
+#define ALT_GRID 32 /* an even grid of feeds from max(v0, v1) down to 0 */
+#define ALT_NEAR 24 /* per end feed, feeds 2^-1 .. 2^-24 of the way from it to the other end feed or to 0 */
 #define ALT_PEAKS (ALT_ABOVE + ALT_GRID + 4 * ALT_NEAR)
 
 /* Candidate k of the fallback: a cruise feed in [0, v_max]. */

@@ -66,7 +66,8 @@ static void test_refused_moves_now_plan(void **state)
         check_ramp(&mv.dec, (double)ax->jp_dec_mm_s3, &r.lim[0], k->cycle);
         assert_true(ax->vc_mm_s > 0 && ax->vc_mm_s <= r.lim[0].v_max_mm_s);
         assert_true(lsm_move_total_cycles(&mv) <= k->witness_cycles);
-        assert_true(fabs((double)lsm_move_end_error_mm(&mv, 0)) <= (LSM_REAL_IS_FLOAT ? 1e-5 : 1e-9) * (fabs(k->D) + 1));
+        assert_true(fabs((double)lsm_move_end_error_mm(&mv, 0)) <=
+                    (LSM_REAL_IS_FLOAT ? 1e-5 : 1e-9) * (fabs(k->D) + 1));
         /* every sampled state within the limits; the terminal state exact */
         const uint32_t n = lsm_move_total_cycles(&mv);
         for (uint32_t i = 0; i < n; i++) {

@@ -166,11 +166,15 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
     lsm_real nhi = lo_v > 0 ? lsm_floor((num / lo_v - base) / dt) : (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
     if (!(nhi < (lsm_real)(LSM_MOVE_MAX_CYCLES - 1)))
         nhi = (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
-    for (lsm_real n = nlo; n <= nhi && n < nlo + 3; n++) { /* rounding at the window's edge: check exactly */
-        const lsm_real vc = num / (base + n * dt);
+    if (!(nlo <= nhi))
+        return false; /* (also a window beyond the cycle counter) */
+    /* integer counts: in float, a real n + 1 stops changing above 2^24 */
+    const uint32_t k0 = (uint32_t)nlo, k1 = (uint32_t)nhi;
+    for (uint32_t n = k0; n <= k1 && n - k0 < 3; n++) { /* rounding at the window's edge: check exactly */
+        const lsm_real vc = num / (base + (lsm_real)n * dt);
         if (vc > 0 && vc <= L->v_max_mm_s && ramp_fits(L, dt, &sh->acc, vc - v0, LSM_SCURVE_RULE_STRICT) &&
             ramp_fits(L, dt, &sh->dec, vc - v1, LSM_SCURVE_RULE_STRICT)) {
-            sh->nc = (uint32_t)n;
+            sh->nc = n;
             return true;
         }
     }

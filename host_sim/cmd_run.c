@@ -2,13 +2,16 @@
  * lissom-sim run: a G-code program through the look-ahead planner and interpolator on a machine.
  *
  *   lissom-sim run PROGRAM --machine MACHINE.json --out DIR [--json] [--planner lissom|vpop] [--override F]
- *                  [--capacity N] [--no-drive] [--plots] [--progress | --no-progress]
+ *                  [--capacity N] [--no-drive] [--no-csv] [--plots] [--progress | --no-progress]
  *
  * Prints duration, cycles, max_deviation, end_error and, per axis, max_axis_velocity, max_axis_acceleration and
  * max_axis_jerk, all measured from the setpoints with backward differences (Beudaert eq 6); see pathrun.h.
  * Writes DIR/setpoints.csv (t, then one column per machine axis), DIR/run.csv (the run CSV of docs/host_sim.md:
  * setpoints, actual positions and following error from the simulated drives, feed, and per-axis v, a, j),
- * DIR/summary.json (what --json prints), and with --plots the PNGs of hil/lissom_hil/plot.py.
+ * DIR/summary.json (what --json prints), and with --plots the PNGs of hil/lissom_hil/plot.py. With --no-csv only
+ * summary.json is written (the same summary), and the run keeps no setpoint: it measures them as they come, in
+ * constant memory (sim_run_opts.summary_only); formatting run.csv costs about half the host time of a --no-drive
+ * run (the benchmark against Klipper, docs/planner.md).
  * A progress bar (progress.h) goes to stderr: on a terminal once the run has taken 2 s of wall time, always with
  * --progress (one line per 10 % step when stderr is not a terminal), never with --no-progress. Stdout only
  * ever holds the summary.
@@ -108,7 +111,7 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         fprintf(f, ", \"j_max\": ");
         json_num(f, x->j_max_u_s3);
         fprintf(f, ", \"within_limits\": %s", ok ? "true" : "false");
-        if (r->act) {
+        if (r->has_act) {
             fprintf(f, ", \"max_following_error\": ");
             json_num(f, r->max_follow_err[a]);
         }
@@ -218,6 +221,7 @@ int cmd_run(int argc, char **argv)
     const char *planner = cli_opt(&a, "planner");
     const bool json = cli_flag(&a, "json");
     const bool no_drive = cli_flag(&a, "no-drive");
+    const bool no_csv = cli_flag(&a, "no-csv");
     const bool plots = cli_flag(&a, "plots");
     const bool progress_on = cli_flag(&a, "progress"), progress_off = cli_flag(&a, "no-progress");
     double ovr = 1.0, capacity = 0;
@@ -228,8 +232,12 @@ int cmd_run(int argc, char **argv)
         return 2;
     if (!program || !machine) {
         fprintf(stderr, "usage: lissom-sim run PROGRAM --machine MACHINE.json --out DIR [--json] "
-                        "[--planner lissom|vpop] [--override F] [--capacity N] [--no-drive] [--plots] "
-                        "[--progress | --no-progress]\n");
+                        "[--planner lissom|vpop] [--override F] [--capacity N] [--no-drive] [--no-csv] "
+                        "[--plots] [--progress | --no-progress]\n");
+        return 2;
+    }
+    if (plots && no_csv) {
+        fprintf(stderr, "error: --plots draws from run.csv: it cannot go with --no-csv\n");
         return 2;
     }
     if (progress_on && progress_off) {
@@ -281,6 +289,7 @@ int cmd_run(int argc, char **argv)
     o.len = len;
     o.capacity = (uint32_t)capacity;
     o.drives = !no_drive;
+    o.summary_only = no_csv; /* constant memory: nothing is kept for CSVs */
     const bool terminal = isatty(2) != 0;
     sim_progress prog;
     sim_progress_init(&prog, stderr, progress_on || (terminal && !progress_off), terminal, progress_on ? 0 : 2.0);
@@ -302,7 +311,7 @@ int cmd_run(int argc, char **argv)
     int rc = 0;
     char path[4200];
     FILE *f = NULL;
-    if (write_csvs(out, &r, &prog) != 0)
+    if (!no_csv && write_csvs(out, &r, &prog) != 0)
         rc = 1; /* its message is printed; the summary is not tried (one message, not two) */
     else
         f = cli_open_out(out, "summary.json", path, sizeof path);
@@ -324,7 +333,10 @@ int cmd_run(int argc, char **argv)
             printf("  %c: v %.6g / %.6g  a %.6g / %.6g  j %.6g / %.6g\n", r.axis_name[i], r.max_v[ax],
                    m.axes[i].v_max_u_s, r.max_a[ax], m.axes[i].a_max_u_s2, r.max_j[ax], m.axes[i].j_max_u_s3);
         }
-        printf("  wrote %s/setpoints.csv, %s/run.csv, %s/summary.json\n", out, out, out);
+        if (no_csv)
+            printf("  wrote %s/summary.json\n", out);
+        else
+            printf("  wrote %s/setpoints.csv, %s/run.csv, %s/summary.json\n", out, out, out);
     }
     if (plots) {
         fflush(stdout);

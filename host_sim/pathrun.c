@@ -321,14 +321,135 @@ static double now_ns(void)
     return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
 }
 
+/* The measurement of the setpoints (pathrun.h), one setpoint at a time: axis v, a, j by backward differences with
+ * the machine at rest on the program's start before the first setpoint and on the last one after it, the deviation
+ * from the programmed path, and (streaming, with drives) the simulated drives' following error. Constant memory:
+ * a run without CSVs (summary_only) measures while it runs and keeps no setpoint; a run that keeps them measures
+ * them afterwards with the same code, so both give the same numbers. */
+typedef struct meter {
+    const prog *p;
+    const sim_machine *m;
+    sim_run_result *r;
+    double dt, reach;
+    size_t n;
+    double q1[LSM_MAX_AXES], q2[LSM_MAX_AXES], q3[LSM_MAX_AXES]; /* q[k-1], q[k-2], q[k-3] */
+    double last[LSM_MAX_AXES];
+    bool drives; /* step the drives here (summary_only) */
+    sim_drive drv[SIM_MACHINE_MAX_AXES];
+    double dq1[LSM_MAX_AXES], dq2[LSM_MAX_AXES]; /* the drives' own history (at rest on the start) */
+} meter;
+
+static void meter_init(meter *mt, const prog *p, const sim_machine *m, sim_run_result *r, bool drives)
+{
+    memset(mt, 0, sizeof *mt);
+    mt->p = p;
+    mt->m = m;
+    mt->r = r;
+    mt->dt = m->cycle_s;
+    mt->drives = drives;
+    double vmax = 0;
+    for (int i = 0; i < m->n_axes; i++)
+        if (m->axes[i].v_max_u_s > vmax && !m->axes[i].rotary)
+            vmax = m->axes[i].v_max_u_s;
+    mt->reach = 2 * vmax * mt->dt + 1.0;
+    for (int a = 0; a < LSM_MAX_AXES; a++)
+        r->max_v[a] = r->max_a[a] = r->max_j[a] = 0;
+    r->max_dev_mm = 0;
+}
+
+static void meter_diff(meter *mt, int a, double q0)
+{
+    sim_run_result *r = mt->r;
+    const double dt = mt->dt, q1 = mt->q1[a], q2 = mt->q2[a], q3 = mt->q3[a];
+    const double v = fabs(q0 - q1) / dt;
+    const double acc = fabs(q0 - 2 * q1 + q2) / (dt * dt);
+    const double j = fabs(q0 - 3 * q1 + 3 * q2 - q3) / (dt * dt * dt);
+    if (v > r->max_v[a])
+        r->max_v[a] = v;
+    if (acc > r->max_a[a])
+        r->max_a[a] = acc;
+    if (j > r->max_j[a])
+        r->max_j[a] = j;
+    mt->q3[a] = q2;
+    mt->q2[a] = q1;
+    mt->q1[a] = q0;
+}
+
+static void meter_drives(meter *mt, const double q[LSM_MAX_AXES])
+{
+    const sim_machine *m = mt->m;
+    const double dt = mt->dt;
+    for (int i = 0; i < m->n_axes; i++) {
+        const int a = m->axes[i].index;
+        if (mt->n == 0) { /* validated before the run (sim_run_program) */
+            (void)sim_drive_init(&mt->drv[i], &m->axes[i].drive, dt, q[a]);
+            mt->dq1[a] = mt->dq2[a] = mt->p->n ? mt->p->v[0].b.start[a] : q[a];
+        }
+        const double q0 = q[a], q1 = mt->dq1[a], q2 = mt->dq2[a];
+        const double v = (q0 - q1) / dt, acc = (q0 - 2 * q1 + q2) / (dt * dt);
+        double act;
+        sim_drive_step_ff(&mt->drv[i], q0, v, acc, &act);
+        const double fe = fabs(q0 - act);
+        if (fe > mt->r->max_follow_err[a])
+            mt->r->max_follow_err[a] = fe;
+        mt->dq2[a] = q1;
+        mt->dq1[a] = q0;
+    }
+}
+
+static double dev_of(const prog *p, const double x[3], uint32_t line, double reach_mm);
+
+static void meter_push(meter *mt, const double q[LSM_MAX_AXES], uint32_t line)
+{
+    for (int a = 0; a < LSM_MAX_AXES; a++) {
+        if (mt->n == 0) /* at rest on the program's start before the first setpoint */
+            mt->q1[a] = mt->q2[a] = mt->q3[a] = mt->p->n ? mt->p->v[0].b.start[a] : q[a];
+        meter_diff(mt, a, q[a]);
+    }
+    const double d = dev_of(mt->p, q, line, mt->reach);
+    if (d > mt->r->max_dev_mm) {
+        mt->r->max_dev_mm = d;
+        if (getenv("LSM_DEV_DEBUG"))
+            fprintf(stderr, "dev %g at k %zu line %u pos %g %g %g\n", d, mt->n, line, q[0], q[1], q[2]);
+    }
+    if (mt->drives)
+        meter_drives(mt, q);
+    memcpy(mt->last, q, sizeof mt->last);
+    mt->n++;
+}
+
+/* The machine at rest on the last setpoint for three more cycles; the end error. */
+static void meter_finish(meter *mt)
+{
+    sim_run_result *r = mt->r;
+    r->end_error = 0;
+    if (mt->n == 0)
+        return;
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < LSM_MAX_AXES; a++)
+            meter_diff(mt, a, mt->last[a]);
+    for (int i = 0; i < mt->m->n_axes; i++) {
+        const int a = mt->m->axes[i].index;
+        const double e = fabs(mt->last[a] - mt->p->end[a]);
+        if (e > r->end_error)
+            r->end_error = e;
+    }
+}
+
 typedef struct rec {
     double *q, *feed;
     uint32_t *line;
     size_t n, cap;
+    meter *stream; /* summary_only: measure each setpoint here and keep none */
 } rec;
 
 static int rec_push(rec *r, const double pos[LSM_MAX_AXES], double feed, uint32_t line)
 {
+    if (r->stream) {
+        meter_push(r->stream, pos, line);
+        r->n++;
+        return 0;
+    }
     if (r->n == r->cap) {
         size_t nc = r->cap ? 2 * r->cap : 4096;
         double *nq = realloc(r->q, nc * LSM_MAX_AXES * sizeof *nq);
@@ -1058,7 +1179,20 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     r->prog_blocks = p.n;
     r->prog_length_mm = p.length;
 
+    meter mt;
+    meter_init(&mt, &p, m, r, o->summary_only && o->drives);
+    if (mt.drives) { /* the drives' parameters are checked before the run (they start on the first setpoint) */
+        for (int i = 0; i < m->n_axes; i++) {
+            lsm_status st = sim_drive_init(&mt.drv[i], &m->axes[i].drive, m->cycle_s, 0.0);
+            if (st != LSM_OK) {
+                snprintf(r->err, sizeof r->err, "drive %c: %s", m->axes[i].name, lsm_status_str(st));
+                prog_free(&p);
+                return -1;
+            }
+        }
+    }
     rec out = {0};
+    out.stream = o->summary_only ? &mt : NULL;
     int rc;
     if (o->planner == SIM_RUN_VPOP)
         rc = run_vpop(o, &p, &out, r);
@@ -1078,60 +1212,21 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
         prog_free(&p);
         return rc;
     }
-    r->n = out.n;
+    r->n = o->summary_only ? 0 : out.n;
     r->q = out.q;
     r->feed = out.feed;
     r->line = out.line;
-    /* metrics: backward differences with the machine at rest before and after */
-    const double dt = m->cycle_s;
-    for (int a = 0; a < LSM_MAX_AXES; a++) {
-        r->max_v[a] = r->max_a[a] = r->max_j[a] = 0;
-        if (r->n == 0)
-            continue;
-        /* at rest on the program's start before the first setpoint */
-        double q1 = p.n ? p.v[0].b.start[a] : r->q[a], q2 = q1, q3 = q1; /* q[k-1], q[k-2], q[k-3] */
-        for (size_t k = 0; k < r->n + 3; k++) {
-            const double q0 = k < r->n ? r->q[k * LSM_MAX_AXES + a] : r->q[(r->n - 1) * LSM_MAX_AXES + a];
-            const double v = fabs(q0 - q1) / dt;
-            const double acc = fabs(q0 - 2 * q1 + q2) / (dt * dt);
-            const double j = fabs(q0 - 3 * q1 + 3 * q2 - q3) / (dt * dt * dt);
-            if (v > r->max_v[a])
-                r->max_v[a] = v;
-            if (acc > r->max_a[a])
-                r->max_a[a] = acc;
-            if (j > r->max_j[a])
-                r->max_j[a] = j;
-            q3 = q2;
-            q2 = q1;
-            q1 = q0;
-        }
+    r->has_act = o->drives && mt.n + r->n > 0; /* (as act != NULL when the setpoints are kept) */
+    if (o->summary_only) {                     /* measured while it ran */
+        meter_finish(&mt);
+        prog_free(&p);
+        return 0;
     }
-    /* deviation from the programmed path */
-    double vmax = 0;
-    for (int i = 0; i < m->n_axes; i++)
-        if (m->axes[i].v_max_u_s > vmax && !m->axes[i].rotary)
-            vmax = m->axes[i].v_max_u_s;
-    const double reach = 2 * vmax * dt + 1.0;
-    r->max_dev_mm = 0;
-    for (size_t k = 0; k < r->n; k++) {
-        const double d = dev_of(&p, r->q + k * LSM_MAX_AXES, r->line[k], reach);
-        if (d > r->max_dev_mm) {
-            r->max_dev_mm = d;
-            if (getenv("LSM_DEV_DEBUG"))
-                fprintf(stderr, "dev %g at k %zu line %u pos %g %g %g\n", d, k, r->line[k], r->q[k * LSM_MAX_AXES],
-                        r->q[k * LSM_MAX_AXES + 1], r->q[k * LSM_MAX_AXES + 2]);
-        }
-    }
-    r->end_error = 0;
-    if (r->n) {
-        for (int i = 0; i < m->n_axes; i++) {
-            const int a = m->axes[i].index;
-            const double e = fabs(r->q[(r->n - 1) * LSM_MAX_AXES + a] - p.end[a]);
-            if (e > r->end_error)
-                r->end_error = e;
-        }
-    }
+    for (size_t k = 0; k < r->n; k++)
+        meter_push(&mt, r->q + k * LSM_MAX_AXES, r->line[k]);
+    meter_finish(&mt);
     /* drives */
+    const double dt = m->cycle_s;
     if (o->drives && r->n) {
         r->act = calloc(r->n * LSM_MAX_AXES, sizeof *r->act);
         if (!r->act) {

@@ -54,7 +54,11 @@ typedef struct sim_run_opts {
     const sim_run_event *events;
     size_t n_events;
     lsm_planner_config *cfg_override; /* optional: planner configuration to use instead of the machine's */
-    sim_run_progress_fn progress;     /* optional progress reports (NULL: none) */
+    /* summary_only: measure the setpoints while running and keep none (constant memory): the result has the
+     * summary (the same numbers as a run that keeps them) with n = 0 and q = feed = line = act = NULL; the drives
+     * run with the planner (no progress reports of their own) */
+    bool summary_only;
+    sim_run_progress_fn progress; /* optional progress reports (NULL: none) */
     void *progress_ctx;
 } sim_run_opts;
 
@@ -68,7 +72,7 @@ typedef struct sim_run_mfunc {
 } sim_run_mfunc;
 
 typedef struct sim_run_result {
-    size_t n; /* setpoints (one per cycle) */
+    size_t n; /* setpoints kept (one per cycle; 0 with summary_only) */
     double cycle_s;
     int n_axes;                           /* machine axes */
     int axis_index[SIM_MACHINE_MAX_AXES]; /* their G-code index (X = 0 .. C = 5) */
@@ -77,6 +81,7 @@ typedef struct sim_run_result {
     double *feed;      /* n: path feed (mm/s) */
     uint32_t *line;    /* n: source line of the block being run */
     double *act;       /* n x LSM_MAX_AXES actual positions (drives) or NULL */
+    bool has_act;      /* the drives ran (max_follow_err is measured), also with summary_only */
     double duration_s; /* time of the last setpoint that moved (the motion's end) */
     uint64_t cycles;   /* cycles up to then */
     double max_v[LSM_MAX_AXES], max_a[LSM_MAX_AXES], max_j[LSM_MAX_AXES];

@@ -65,7 +65,7 @@ NAMES = {
     0x5020: ("Machine status", None),
     0x5F00: ("Tick statistics", {0: "Highest sub-index supported", 1: "Ticks", 2: "Overruns",
                                  3: "Worst tick instructions", 4: "Background load", 5: "Late wake-ups",
-                                 6: "Clock"}),
+                                 6: "Clock", 7: "Path underruns", 8: "Path set-points ahead minimum"}),
     0x6007: ("Abort connection option code", None),
     0x603F: ("Error code", None),
     0x6040: ("Controlword", None),

@@ -74,7 +74,7 @@ typedef enum lsm_can_bus_event {
     LSM_CAN_BUS_RX_OVERRUN = 3     /* the port lost received frames: EMCY 0x8110 */
 } lsm_can_bus_event;
 
-/* Statistics of the port's control tick, shown read-only in object 0x5F00 (sub 1..4). The port fills them
+/* Statistics of the port's control tick, shown read-only in object 0x5F00 (sub 1..8). The port fills them
  * (lsm_canopen_set_tick_stats); the node only shows them, and keeps them across an NMT reset. */
 typedef struct lsm_canopen_tick_stats {
     uint32_t ticks;            /* sub 1: control ticks since the port started */
@@ -84,6 +84,10 @@ typedef struct lsm_canopen_tick_stats {
     uint32_t late_wakes;       /* sub 5: ticks that started late because the sleeping CPU was woken late (an
                                    emulator's host scheduling; not overruns of the tick's own work) */
     uint32_t clock_ms;         /* sub 6: the port's clock (the now_us the node runs on) in ms, wraps */
+    uint32_t path_underruns;   /* sub 7: ticks whose path set-point the background had not made in time while the
+                                   path moved (the motion layer's abort stop, motion.h) */
+    uint32_t path_min_ahead;   /* sub 8: fewest path set-points the background had ready ahead of a tick while the
+                                   path moved (0xFFFFFFFF: never moved) */
 } lsm_canopen_tick_stats;
 
 typedef struct lsm_canopen_config {

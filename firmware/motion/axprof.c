@@ -176,6 +176,24 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
     return LSM_OK;
 }
 
+lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
+{
+    if (p->mode == LSM_AXPROF_MOVE && p->defer != AXPROF_DEFER_NONE)
+        p->defer = AXPROF_DEFER_NONE;                     /* a deferred halt or retarget is superseded by this stop */
+    if (p->mode == LSM_AXPROF_MOVE && in_jerk_pulse(p)) { /* start now: jstop releases the jerk in progress */
+        p->have_after = false;
+        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
+        if (st != LSM_OK)
+            return st;
+        p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+        p->stop_kind = kind;
+        if (p->mode == LSM_AXPROF_IDLE)
+            p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+        return LSM_OK;
+    }
+    return lsm_axprof_stop(p, lim, kind);
+}
+
 /* A deferred request, taken at the end of the jerk pulse (the move's jerk is 0, or the move has ended). */
 static void take_deferred(lsm_axprof *p)
 {
@@ -194,6 +212,12 @@ static void take_deferred(lsm_axprof *p)
         return;
     if (p->mode == LSM_AXPROF_STOP) { /* the move waits for the end of the stop */
         p->have_after = true;
+        return;
+    }
+    if (p->plan_outside) { /* the owner plans it (from the present state) */
+        p->after_target_mm = after_target;
+        p->after_lim = after_lim;
+        p->after_due = true;
         return;
     }
     (void)lsm_axprof_move(p, after_target, &after_lim);
@@ -229,6 +253,11 @@ static void step_stop(lsm_axprof *p)
         return;
     p->mode = LSM_AXPROF_IDLE;
     p->stop_kind = 0;
+    if (p->have_after && p->plan_outside) {
+        p->have_after = false;
+        p->after_due = true;
+        return;
+    }
     if (p->have_after) {
         p->have_after = false;
         const lsm_axprof_limits l = p->after_lim;

@@ -75,6 +75,9 @@ typedef struct lsm_axprof {
     uint8_t defer_kind;         /* deferred stop: its kind */
     lsm_jstop_limits defer_lim; /* deferred stop: its limits */
     bool have_after;            /* a move waits for the end of the stop (retarget), or a deferred retarget */
+    bool plan_outside;          /* set by the owner: the waiting move is not planned inside lsm_axprof_step; at its
+                                   time after_due is raised and the owner plans it (motion.h: in the background) */
+    bool after_due;             /* plan_outside: the waiting move (after_target_mm, after_lim) is due now */
     lsm_real after_target_mm;
     lsm_axprof_limits after_lim;
 } lsm_axprof;
@@ -91,6 +94,13 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
  * the pulse, see above), unless a stop at least as strong (kind) already runs. Cancels a pending retarget. At rest (IDLE with v = a = 0): nothing. Returns LSM_OK or a
  * lsm_jstop_plan error (then the state is held: it cannot happen with validated limits). Control cycle. */
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
+
+/* As lsm_axprof_stop, but never deferred: inside a jerk pulse of a move the stop starts in this cycle and first
+ * releases the jerk in progress (jstop.h). For quick stops and emergency stops (E-stop, fault reaction), which must
+ * begin in the cycle they are seen in: the price is the bounded overshoot described above (|a| up to
+ * |a0| + pi j0² / (4 S), the velocity past the profile velocity by the velocity that adds), instead of up to one
+ * acceleration ramp of delay (66 ms on the HIL profile). A deferred halt or retarget is dropped. Control cycle. */
+lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
 
 /* One cycle. Returns true if the coordinate moved during it. Control cycle. */
 bool lsm_axprof_step(lsm_axprof *p);

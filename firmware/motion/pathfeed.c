@@ -201,7 +201,7 @@ static void unstick(lsm_pathfeed *pf, const lsm_real *cpm)
 }
 
 /* Epoch (clear, refused block) and override. */
-static void follow_commands(lsm_pathfeed *pf, const lsm_co_path *cp)
+static void follow_commands(lsm_pathfeed *pf, const lsm_pathfeed_io *cp)
 {
     if (cp->epoch != pf->epoch) { /* clear, or a block refused: drop what the planner holds once at rest */
         if (lsm_planner_count(&pf->pl) != 0u || lsm_pathfeed_moving(pf))
@@ -223,18 +223,18 @@ static void follow_commands(lsm_pathfeed *pf, const lsm_co_path *cp)
 }
 
 /* Moves blocks from the co_path buffer into the planner while it has room (the flow control of 0x5010). */
-static void feed_blocks(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm)
+static void feed_blocks(lsm_pathfeed *pf, const lsm_pathfeed_io *io, const lsm_real *cpm)
 {
     lsm_co_path_block b;
-    while (lsm_planner_free(&pf->pl) >= LSM_PATHFEED_FREE_MIN && lsm_co_path_peek(cp, 0, &b)) {
+    while (lsm_planner_free(&pf->pl) >= LSM_PATHFEED_FREE_MIN && io->peek(io->ctx, &b)) {
         const lsm_status st = append(pf, &b, cpm);
         if (st == LSM_E_FULL)
             break; /* no room yet (the planner emitted the G1 points it held for arc fitting, planner.h): the block
                     * stays first in the node's buffer and is appended again on a later cycle */
-        (void)lsm_co_path_pop(cp, &b);
+        io->pop(io->ctx);
         if (st != LSM_OK) {
             pf->rejected++;
-            lsm_co_path_reject(cp, b.seq);
+            io->reject(io->ctx, b.seq);
             break;
         }
         save(pf, &b);
@@ -243,15 +243,15 @@ static void feed_blocks(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm)
     }
     /* the node's buffer ran dry: let the planner emit the G1 points it holds for arc fitting (planner.h),
      * so that the machine does not wait for blocks that may not come */
-    if (lsm_co_path_count(cp) == 0u)
+    if (io->pending(io->ctx) == 0u)
         (void)lsm_planner_flush(&pf->pl);
 }
 
-void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm)
+void lsm_pathfeed_background_io(lsm_pathfeed *pf, const lsm_pathfeed_io *io, const lsm_real *cpm)
 {
-    const lsm_co_path_motion motion = lsm_co_path_get_motion(cp);
+    const lsm_co_path_motion motion = (lsm_co_path_motion)io->motion;
     pf->motion = (uint8_t)motion;
-    follow_commands(pf, cp);
+    follow_commands(pf, io);
     if (motion == LSM_CO_PATH_MOTION_RUN && !pf->dirty) {
         if (pf->holding) {
             lsm_interp_resume(&pf->ip);
@@ -265,7 +265,7 @@ void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *
             unstick(pf, cpm);
             pf->idle_cycles = 0u;
         }
-        feed_blocks(pf, cp, cpm);
+        feed_blocks(pf, io, cpm);
     } else if ((motion == LSM_CO_PATH_MOTION_HOLD || motion == LSM_CO_PATH_MOTION_QUICK) && !pf->holding) {
         lsm_interp_hold(&pf->ip);
         pf->holding = true;
@@ -273,7 +273,7 @@ void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *
     (void)lsm_interp_prepare(&pf->ip); /* background planning between cycles */
 }
 
-void lsm_pathfeed_tick(lsm_pathfeed *pf, const lsm_co_path *cp, lsm_co_path_report *rep)
+void lsm_pathfeed_tick_io(lsm_pathfeed *pf, size_t pending, lsm_co_path_report *rep)
 {
     lsm_real p[LSM_MAX_AXES];
     (void)lsm_interp_step(&pf->ip, p);
@@ -286,7 +286,56 @@ void lsm_pathfeed_tick(lsm_pathfeed *pf, const lsm_co_path *cp, lsm_co_path_repo
     const lsm_real f = lsm_fabs(lsm_interp_feed(&pf->ip)) * 1000;
     rep->feed_um_s = f > (lsm_real)4.0e9 ? 4000000000u : (uint32_t)(f + (lsm_real)0.5);
     rep->standstill = !lsm_pathfeed_moving(pf);
-    rep->starved = pf->motion == LSM_CO_PATH_MOTION_RUN && !lsm_pathfeed_moving(pf) && lsm_co_path_count(cp) == 0u;
+    rep->starved = pf->motion == LSM_CO_PATH_MOTION_RUN && !lsm_pathfeed_moving(pf) && pending == 0u;
+}
+
+/* The synchronous loop's block source: the node's co_path buffer itself. */
+static bool cp_peek(void *ctx, lsm_co_path_block *b)
+{
+    return lsm_co_path_peek((const lsm_co_path *)ctx, 0, b);
+}
+
+static void cp_pop(void *ctx)
+{
+    lsm_co_path_block b;
+    (void)lsm_co_path_pop((lsm_co_path *)ctx, &b);
+}
+
+static void cp_reject(void *ctx, uint32_t seq)
+{
+    lsm_co_path_reject((lsm_co_path *)ctx, seq);
+}
+
+static size_t cp_pending(void *ctx)
+{
+    return lsm_co_path_count((const lsm_co_path *)ctx);
+}
+
+void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm)
+{
+    lsm_pathfeed_io io;
+    io.epoch = cp->epoch;
+    io.override_pct = cp->override_pct;
+    io.motion = (uint8_t)lsm_co_path_get_motion(cp);
+    io.peek = cp_peek;
+    io.pop = cp_pop;
+    io.reject = cp_reject;
+    io.pending = cp_pending;
+    io.ctx = cp;
+    lsm_pathfeed_background_io(pf, &io, cpm);
+}
+
+void lsm_pathfeed_tick(lsm_pathfeed *pf, const lsm_co_path *cp, lsm_co_path_report *rep)
+{
+    lsm_pathfeed_tick_io(pf, lsm_co_path_count(cp), rep);
+}
+
+lsm_status lsm_pathfeed_restart_at(lsm_pathfeed *pf, const lsm_real *pos_mm)
+{
+    const lsm_status st = restart(pf, pos_mm);
+    if (st == LSM_OK)
+        pf->restarts++;
+    return st;
 }
 
 void lsm_pathfeed_step(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm, lsm_co_path_report *rep)

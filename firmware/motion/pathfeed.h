@@ -31,11 +31,13 @@
  * again (none is lost or run twice; the junction becomes an exact stop). If the axes stand on no block end, it
  * does nothing and counts it (stuck).
  *
- * Contexts: lsm_pathfeed_step runs once per control cycle; it appends blocks, lets the interpolator prepare
- * the next piece (lsm_interp_prepare) and steps it, in that order, as a synchronous loop. Its two halves are
- * lsm_pathfeed_background (appends, prepare) and lsm_pathfeed_tick (the interpolator step and the report).
- * lsm_pathfeed_init: before the cycle runs. Caller-owned memory (planner blocks and block copies), no
- * allocation.
+ * Contexts: the whole feed (planner, interpolator, block copies) belongs to ONE context, the one that calls
+ * lsm_pathfeed_background(_io) and lsm_pathfeed_tick(_io): planner.h / interp.h do not yet hand their state between
+ * a preempting lsm_interp_step and the appends / lsm_interp_prepare (docs/planner.md, "Concurrency"), so the feed
+ * never splits them. In the synchronous loop that context is the control cycle (lsm_pathfeed_step: background
+ * half, then the step). In the CiA 402 layer's split (motion.h) it is the background, which runs the feed ahead of
+ * the tick and hands each cycle's set-points over (mpipe.h): the tick then calls nothing here. lsm_pathfeed_init:
+ * before either runs. Caller-owned memory (planner blocks and block copies), no allocation.
  *
  * Units: mm, s (block values in counts and µm are converted with each axis's counts per mm, 0x2001).
  */
@@ -75,6 +77,22 @@ typedef struct lsm_pathfeed {
     uint32_t saved_cap, saved_head, n_saved; /* oldest copy at saved[saved_head] */
 } lsm_pathfeed;
 
+/* Where lsm_pathfeed_background_io takes the co_path commands and blocks from: the node's co_path buffer in the
+ * synchronous loop (lsm_pathfeed_background), or the motion layer's hand-off from the tick (motion.h). peek: the
+ * next block (false: none); pop: drop it (appended or refused); reject: the planner refused block seq (the owner
+ * of co_path calls lsm_co_path_reject); pending: blocks waiting upstream (0: the planner may emit the G1 points it
+ * holds for arc fitting). All called from the context that runs lsm_pathfeed_background_io. */
+typedef struct lsm_pathfeed_io {
+    uint16_t epoch;       /* co_path epoch */
+    uint8_t override_pct; /* 0x5001 */
+    uint8_t motion;       /* lsm_co_path_motion */
+    bool (*peek)(void *ctx, lsm_co_path_block *b);
+    void (*pop)(void *ctx);
+    void (*reject)(void *ctx, uint32_t seq);
+    size_t (*pending)(void *ctx);
+    void *ctx;
+} lsm_pathfeed_io;
+
 /* The feed's storage, owned by the caller for the feed's lifetime. blocks: planner storage (capacity
  * >= LSM_PLANNER_MIN_BLOCKS; a block with a corner takes 3). saved: block copies for the underrun workaround,
  * saved_cap > capacity (the planner never holds more blocks than its capacity; one more for the block the axes
@@ -92,21 +110,35 @@ lsm_status lsm_pathfeed_init(lsm_pathfeed *pf, uint8_t n_axes, lsm_real cycle_s,
                              const lsm_real *pos_mm, const lsm_pathfeed_storage *mem);
 
 /* The axes moved by other means: restart the (empty, idle) planner at these positions. Ignored while the
- * planner holds blocks or moves. Control cycle (synchronous loop). */
+ * planner holds blocks or moves. The feed's context. */
 void lsm_pathfeed_sync(lsm_pathfeed *pf, const lsm_real *pos_mm);
 
 /* One control cycle of the synchronous loop: lsm_pathfeed_background then lsm_pathfeed_tick. cpm[k] = counts
- * per mm of axis k (0x2001). Fills the report for lsm_co_path_update. */
+ * per mm of axis k (0x2001). Fills the report for lsm_co_path_update. The feed's context (which owns cp too). */
 void lsm_pathfeed_step(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm, lsm_co_path_report *rep);
 
 /* The co_path commands (epoch, override, run / hold), the block appends and the underrun workaround, then
- * lsm_interp_prepare. Background of the synchronous loop. */
+ * lsm_interp_prepare, reading the node's co_path buffer directly. The feed's context, which must then own cp too
+ * (the synchronous loop). */
 void lsm_pathfeed_background(lsm_pathfeed *pf, lsm_co_path *cp, const lsm_real *cpm);
 
-/* One interpolator step: the set-points pos_mm / vel_mm_s and the report. Control cycle. */
+/* The same from any block source (lsm_pathfeed_io above). The context that owns the feed's planner: the
+ * background (motion.h). */
+void lsm_pathfeed_background_io(lsm_pathfeed *pf, const lsm_pathfeed_io *io, const lsm_real *cpm);
+
+/* One interpolator step: the set-points pos_mm / vel_mm_s and the report. The context that steps the
+ * interpolator: the control cycle in the synchronous loop; the background in motion.h's split, which runs the
+ * interpolator ahead of the tick and hands its set-points over. */
 void lsm_pathfeed_tick(lsm_pathfeed *pf, const lsm_co_path *cp, lsm_co_path_report *rep);
 
-/* True while the interpolator moves. Any context of the owner. */
+/* The same with the count of blocks waiting upstream given (the report's starved flag). Same context. */
+void lsm_pathfeed_tick_io(lsm_pathfeed *pf, size_t pending, lsm_co_path_report *rep);
+
+/* Restarts the (emptied) planner at rest at pos_mm[n_axes]: the blocks it held are dropped. Errors: those of
+ * lsm_planner_init. The context that owns the feed. */
+lsm_status lsm_pathfeed_restart_at(lsm_pathfeed *pf, const lsm_real *pos_mm);
+
+/* True while the interpolator moves. The feed's context. */
 bool lsm_pathfeed_moving(const lsm_pathfeed *pf);
 
 #endif /* LSM_PATHFEED_H */

@@ -17,6 +17,7 @@
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
+#define HZ_NOT_POSTED 0xFFu /* hz_posted_phase: no phase of the current piece posted its horizon whole yet */
 #define CUR(ip) ((ip)->pcs[(ip)->cur])
 #define NXT(ip) ((ip)->pcs[(ip)->cur ^ 1u])
 
@@ -157,12 +158,9 @@ static void activate(lsm_interp *ip)
     }
 }
 
-/* Position of the current block at the cursor (after activate or an incremental update). */
-static void eval_pos(lsm_interp *ip)
+/* Position of the current block b (the block ip->blk) at the cursor (after activate or an incremental update). */
+static void eval_pos_in(lsm_interp *ip, const lsm_pblock *b)
 {
-    const lsm_pblock *b = bk(ip, ip->blk);
-    if (b == NULL)
-        return;
     const lsm_geom *g = &b->g;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
@@ -187,6 +185,14 @@ static void eval_pos(lsm_interp *ip)
         for (int i = 0; i < 3; i++)
             ip->pos[i] = c->origin_mm[i] + c->e1[i] * ip->cs.x_mm + c->e2[i] * ip->cs.y_mm;
     }
+}
+
+/* eval_pos_in on the block the cursor is on (none: nothing). */
+static void eval_pos(lsm_interp *ip)
+{
+    const lsm_pblock *b = bk(ip, ip->blk);
+    if (b != NULL)
+        eval_pos_in(ip, b);
 }
 
 /* Moves the cursor by ds (>= 0) and evaluates the position there. */
@@ -246,7 +252,7 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
     } else if (ip->gkind == LSM_GEOM_CLOTHOID && ds > R0) {
         (void)lsm_clothoid_step(&ip->cs, ds, NULL);
     }
-    eval_pos(ip);
+    eval_pos_in(ip, b); /* b is the block at the cursor (looked up once per cycle: a lookup is a call and a division) */
 }
 
 /* Puts the cursor exactly on (id, off) and evaluates there. */
@@ -293,6 +299,7 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     const lsm_piece *pc = &CUR(ip);
     ip->running = 1;
     ip->serial++;
+    ip->hz_posted_phase = HZ_NOT_POSTED;
     lsm_planner_post_stale_ack(ip->pl, ip->prep.stale_seen); /* a piece planned on the geometry of then */
     ip->state = LSM_INTERP_RUN;
     ip->v_mm_s = pc->v0_mm_s;
@@ -725,6 +732,25 @@ static void end_piece(lsm_interp *ip)
     }
 }
 
+/* Posts the commitment horizon after a cycle that runs on in the current piece (lsm_planner_set_horizon): in a ramp
+ * its end, in a cruise the cursor. Whole at the first cycle of each phase of a piece; then a ramp's horizon is
+ * unchanged (set at the ramp's entry: posted again would change nothing) and a cruise's end is, so only the
+ * cursor is posted (a whole post every cycle cost the cycle about 60 instructions). */
+static void post_horizon(lsm_interp *ip)
+{
+    const uint8_t p = ip->phase;
+    if (p == ip->hz_posted_phase) {
+        if (!is_ramp_phase(p))
+            lsm_planner_post_cursor(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s);
+        return;
+    }
+    ip->hz_posted_phase = p;
+    if (is_ramp_phase(p))
+        lsm_planner_post_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
+    else
+        lsm_planner_post_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
+}
+
 /* Runs one cycle (or the rest `first` of it) of the current piece, chaining into the next pieces. */
 static void run_cycle(lsm_interp *ip, lsm_real first)
 {
@@ -761,10 +787,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         }
         if (!ended) {
             advance_path(ip, PATH_DS(ip, ds));
-            if (is_ramp_phase(ip->phase))
-                lsm_planner_post_horizon(ip->pl, ip->hz_blk, ip->hz_off, ip->hz_v, CUR(ip).end_blk, CUR(ip).v1_mm_s);
-            else
-                lsm_planner_post_horizon(ip->pl, ip->blk, ip->off_mm, ip->v_mm_s, CUR(ip).end_blk, CUR(ip).v1_mm_s);
+            post_horizon(ip);
             return;
         }
         end_piece(ip);
@@ -796,6 +819,7 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl)
         return LSM_E_NULL;
     memset(ip, 0, sizeof *ip);
     ip->pl = pl;
+    ip->hz_posted_phase = HZ_NOT_POSTED;
     ip->state = LSM_INTERP_IDLE;
     ip->blk = pl->head;
     ip->off_mm = R0;
@@ -877,8 +901,10 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
         if (ip->running)
             run_cycle(ip, dt);
     }
-    if (!ip->running) /* at rest (or stopped for good): the machine stands here */
+    if (!ip->running) { /* at rest (or stopped for good): the machine stands here */
         lsm_planner_post_horizon(pl, ip->blk, ip->off_mm, R0, ip->blk, R0);
+        ip->hz_posted_phase = HZ_NOT_POSTED;
+    }
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pos[i] = ip->pos[i];
     return (lsm_interp_state)ip->state;

@@ -157,7 +157,8 @@ typedef struct lsm_interp {
     uint32_t lead_cycles;       /* SW_SAMPLE switch points are at least this many cycles ahead (0: the next one) */
     uint32_t tick_plans;        /* pieces planned inside lsm_interp_step (none were prepared) */
     uint8_t bg;                 /* lsm_interp_prepare is in use: the cycle plans only what it must */
-    uint8_t reserved2[3];
+    uint8_t hz_posted_phase; /* the phase of the current piece whose horizon was posted whole (HZ_NOT_POSTED: none) */
+    uint8_t reserved2[2];
     uint32_t prepared;    /* pieces planned by lsm_interp_prepare */
     lsm_interp_prep prep; /* the slot of lsm_interp_prepare */
 } lsm_interp;

@@ -364,6 +364,17 @@ void lsm_planner_post_release(lsm_planner *pl, uint32_t id);
 /* Control cycle: the commitment horizon, as lsm_planner_set_horizon. */
 void lsm_planner_post_horizon(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s, uint32_t end_blk,
                               lsm_real end_v_mm_s);
+/* Control cycle: the horizon moves to (id, off_mm) at v_mm_s, its end as posted last (lsm_planner_post_horizon
+ * called before: the end is unchanged). Inline: the cruise posts it every cycle. */
+static inline void lsm_planner_post_cursor(lsm_planner *pl, uint32_t id, lsm_real off_mm, lsm_real v_mm_s)
+{
+    lsm_planner_req *r = &pl->req;
+    lsm_seq_write_begin(&r->seq);
+    lsm_seq_put(&r->hz_blk, id);
+    lsm_seq_put(&r->hz_off, off_mm);
+    lsm_seq_put(&r->hz_v, v_mm_s > (lsm_real)0 ? v_mm_s : (lsm_real)0);
+    lsm_seq_write_end(&r->seq);
+}
 /* Control cycle: the tick runs a piece planned when lsm_planner_stale_count was `stale_seen`. */
 void lsm_planner_post_stale_ack(lsm_planner *pl, uint32_t stale_seen);
 /* Background: applies the posted requests (release, horizon). Every background call of this header does it at

@@ -71,6 +71,8 @@ static void ticks(unsigned n)
     for (unsigned i = 0; i < n; i++) {
         g_now += 1000u;
         ctl_app_tick(&g_app, g_now, false, &st);
+        while (ctl_app_background(&g_app)) { /* the main loop between ticks (PP plans, the path feed) */
+        }
     }
 }
 

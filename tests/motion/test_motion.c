@@ -24,10 +24,10 @@
 #include <cmocka.h>
 
 #include "canopen.h"
+#include "cia402_test_od.h"
 #include "motion.h"
 
 #define NID 3u
-#define AX(idx, k) ((uint16_t)((idx) + 0x800u * (k)))
 
 #if LSM_REAL_IS_FLOAT
 #define TOL_REL 1e-5 /* limits: relative rounding of a float state */
@@ -115,17 +115,12 @@ static void rx(uint32_t id, uint8_t dlc, const uint8_t *d)
 
 static void set(uint16_t idx, uint8_t sub, int64_t v)
 {
-    g_app.co.now_us = g_now;
-    uint32_t ab = lsm_co_od_set_int(lsm_canopen_od(&g_app.co), idx, sub, v);
-    if (ab != 0u)
-        fail_msg("write 0x%04X sub %u = %lld: abort 0x%08X", idx, sub, (long long)v, ab);
+    od_set(&g_app.co, g_now, idx, sub, v);
 }
 
 static int64_t get(uint16_t idx, uint8_t sub)
 {
-    int64_t v = 0;
-    assert_int_equal(lsm_co_od_get_int(lsm_canopen_od(&g_app.co), idx, sub, &v), 0);
-    return v;
+    return od_get(&g_app.co, idx, sub);
 }
 
 static void boot(uint8_t path_exec, uint16_t master, uint16_t master_ms)
@@ -200,33 +195,17 @@ static void peaks(size_t from, size_t to, double dt, double out[3])
 
 static size_t count_sent(uint32_t id, uint16_t emcy_code)
 {
-    size_t c = 0;
-    for (size_t i = 0; i < g_n_sent; i++) {
-        if (g_sent[i].id != id)
-            continue;
-        if (id == 0x80u + NID && g_sent[i].dlc == 8u &&
-            (uint16_t)(g_sent[i].data[0] | (g_sent[i].data[1] << 8)) != emcy_code)
-            continue;
-        c++;
-    }
-    return c;
+    return frames_count(g_sent, g_n_sent, NID, id, emcy_code);
 }
 
 static void pp_profile(unsigned k)
-{ /* counts (1000 per mm): 100 mm/s, 1000 mm/s², 2e4 mm/s³, 2e6 mm/s⁴, sin² */
-    set(AX(0x6081, k), 0, 100000);
-    set(AX(0x6083, k), 0, 1000000);
-    set(AX(0x6084, k), 0, 1000000);
-    set(AX(0x2060, k), 0, 20000000);
-    set(AX(0x2061, k), 0, 2000000000);
-    set(AX(0x6086, k), 0, 1);
+{
+    od_pp_profile(&g_app.co, g_now, k);
 }
 
 static void pp_go(unsigned k, int32_t target)
 {
-    set(AX(0x607A, k), 0, target);
-    set(AX(0x6040, k), 0, 0x3F);
-    set(AX(0x6040, k), 0, 0x2F);
+    od_pp_go(&g_app.co, g_now, k, target);
 }
 
 static void test_pp_and_estop(void **state)
@@ -273,6 +252,40 @@ static void test_pp_and_estop(void **state)
     set(0x6040, 0, 0x80);
     cycles(2, false, 0);
     assert_int_equal(lsm_canopen_axis(&g_app.co, 0)->state, LSM_CIA402_SWITCH_ON_DISABLED);
+}
+
+/* An E-stop inside a jerk pulse of a PP move (the acceleration still rising) begins in the cycle it is seen in:
+ * the stop releases the jerk at once (jstop.h) instead of waiting for the end of the pulse (up to one acceleration
+ * ramp, axprof.h), so the acceleration falls within the release time pi |j0| / (2 S) (S = 1.18e7 mm/s⁴ of the
+ * machine: under 3 ms here) and the speed stays within what the release adds. */
+static void test_estop_in_jerk_pulse(void **state)
+{
+    (void)state;
+    boot(PATH_PLANNER, 0, 0);
+    enable(0, LSM_CIA402_MODE_PP);
+    pp_profile(0);
+    pp_go(0, 40000);
+    cycles(20, false, 0);
+    const lsm_kin k0 = *lsm_motion_demand(&g_app.mo, 0);
+    assert_true(k0.j_mm_s3 > 1000 && k0.a_mm_s2 > 0 && k0.a_mm_s2 < 1000); /* inside the first jerk pulse */
+    cycles(1, true, 0);
+    assert_int_equal(g_app.mo.ax[0].prof.mode, LSM_AXPROF_STOP);
+    double a_max = 0, v_max = 0;
+    unsigned i_amax = 0;
+    for (unsigned i = 0; i < 200u; i++) {
+        const lsm_kin *d = lsm_motion_demand(&g_app.mo, 0);
+        if (d->a_mm_s2 > a_max) {
+            a_max = d->a_mm_s2;
+            i_amax = i;
+        }
+        v_max = fmax(v_max, d->v_mm_s);
+        cycles(1, true, 0);
+    }
+    assert_true(i_amax <= 3u); /* the acceleration falls from the release on */
+    /* the release adds at most pi j0² / (4 S) to a (jstop.h) */
+    assert_true(a_max <= k0.a_mm_s2 + k0.j_mm_s3 * 0.001 + 3.1416 * k0.j_mm_s3 * k0.j_mm_s3 / (4 * 1.18e7) + 1e-6);
+    assert_true(v_max < k0.v_mm_s + 10.0);
+    assert_true(fabs(lsm_motion_demand(&g_app.mo, 0)->v_mm_s) == 0);
 }
 
 /* Set of set-points (0x6040 bit 5 = 0): the second target waits and starts after the first is reached (a rest
@@ -363,26 +376,9 @@ static void test_heartbeat_loss_and_busoff(void **state)
     assert_true(count_sent(0x700u + NID, 0) >= 1);
 }
 
-/* One 0x5010 block through the dictionary's hook (like the SDO download). */
 static uint32_t block(uint32_t seq, uint8_t type, const int32_t end[3], const int32_t *centre, uint32_t feed_um_s)
 {
-    uint8_t b[40];
-    size_t n = 16 + 12 + (type != 1 ? 8 : 0);
-    memset(b, 0, sizeof b);
-    lsm_can_put_u32(&b[0], seq);
-    b[4] = type;
-    b[6] = 3;
-    lsm_can_put_u32(&b[8], feed_um_s);
-    lsm_can_put_u32(&b[12], 10);
-    for (int k = 0; k < 3; k++)
-        lsm_can_put_u32(&b[16 + 4 * k], (uint32_t)end[k]);
-    if (type != 1) {
-        lsm_can_put_u32(&b[28], (uint32_t)centre[0]);
-        lsm_can_put_u32(&b[32], (uint32_t)centre[1]);
-    }
-    lsm_co_od_ref ref;
-    assert_int_equal(lsm_co_od_find(lsm_canopen_od(&g_app.co), 0x5010, 0, &ref), 0);
-    return lsm_co_od_write(lsm_canopen_od(&g_app.co), &ref, b, n);
+    return od_path_block(&g_app.co, seq, type, end, centre, feed_um_s);
 }
 
 static void path_case(uint8_t exec)
@@ -495,6 +491,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pp_and_estop),
         cmocka_unit_test(test_pp_setpoints),
+        cmocka_unit_test(test_estop_in_jerk_pulse),
         cmocka_unit_test(test_heartbeat_loss_and_busoff),
         cmocka_unit_test(test_path_planner),
         cmocka_unit_test(test_path_exact),

@@ -4,10 +4,12 @@
  *   - a posted release counts at once in lsm_planner_free / count / block and frees the slots when applied;
  *     an earlier id frees nothing more; beyond the tail it stops at the tail;
  *   - a posted horizon changes nothing until applied, then sets the horizon as lsm_planner_set_horizon would,
- *     including commit_dirty when the end moved in any of the posts since the last apply;
+ *     including commit_dirty when the end moved in any of the posts since the last apply; a posted cursor
+ *     (lsm_planner_post_cursor) moves the horizon's point and speed and keeps its end (not dirty);
  *   - the stale acknowledgement: a piece planned before an invalidation stays stale after its ack;
  *   - with LSM_TEST_THREADS (the ThreadSanitizer build, ctest planner_req_tsan): the tick posts from one thread
- *     while the background applies from another; every applied horizon is one whole post (no torn tuple), the
+ *     (whole horizons and cursors) while the background applies from another; every applied horizon is one whole
+ *     post (no torn tuple; a cursor's end is the last whole post's), the
  *     horizon and the head only move forward, and the last post is what is applied at the end. Clean under
  *     -fsanitize=thread: no data race in the hand-off.
  * Built double and float (the values compared are exact in both).
@@ -100,6 +102,20 @@ static void test_horizon(void **state)
     lsm_planner_apply_requests(&g_pl);
     assert_int_equal(g_pl.commit_dirty, 1);
     assert_int_equal(g_pl.horizon_end, h + 3u);
+    /* a cursor: the point and speed move, the end stays; not dirty */
+    g_pl.commit_dirty = 0;
+    lsm_planner_post_cursor(&g_pl, h + 3u, (lsm_real)0.75, 25);
+    assert_int_equal(g_pl.horizon_blk, h + 2u); /* not yet applied */
+    lsm_planner_apply_requests(&g_pl);
+    assert_int_equal(g_pl.horizon_blk, h + 3u);
+    assert_true(g_pl.horizon_off == (lsm_real)0.75 && g_pl.horizon_v == 25);
+    assert_int_equal(g_pl.horizon_end, h + 3u);
+    assert_true(g_pl.horizon_end_v == 12);
+    assert_int_equal(g_pl.commit_dirty, 0);
+    lsm_planner_post_cursor(&g_pl, h + 3u, (lsm_real)0.875, -2);
+    lsm_planner_apply_requests(&g_pl);
+    assert_true(g_pl.horizon_off == (lsm_real)0.875 && g_pl.horizon_v == 0); /* clamped */
+    assert_int_equal(g_pl.commit_dirty, 0);
 }
 
 static void test_stale_ack(void **state)
@@ -123,14 +139,24 @@ static void test_stale_ack(void **state)
 #define POSTS 200000u
 static lsm_atomic_u32 g_done;
 
-/* Post i: every field is a function of i, so a torn copy is visible. */
+/* Post i: every field is a function of i, so a torn copy is visible. Every CURSOR_RUN-th post is whole, the
+ * others are cursors (as the interpolator's cruise posts them): their end is the last whole post's, end_of(i). */
+#define CURSOR_RUN 8u
+static uint32_t end_of(uint32_t i)
+{
+    return i - (i - 1u) % CURSOR_RUN;
+}
+
 static void *tick_thread(void *arg)
 {
     (void)arg;
     const uint32_t h = g_pl.head, t = g_pl.tail; /* read before the background thread exists */
     for (uint32_t i = 1; i <= POSTS; i++) {
-        lsm_planner_post_horizon(&g_pl, h + i, (lsm_real)(i % 64u) / 8, (lsm_real)(i % 1000u), h + i + 3u,
-                                 (lsm_real)(i % 512u) / 4);
+        if (end_of(i) == i)
+            lsm_planner_post_horizon(&g_pl, h + i, (lsm_real)(i % 64u) / 8, (lsm_real)(i % 1000u), h + i + 3u,
+                                     (lsm_real)(i % 512u) / 4);
+        else
+            lsm_planner_post_cursor(&g_pl, h + i, (lsm_real)(i % 64u) / 8, (lsm_real)(i % 1000u));
         if (i % 4096u == 0u && h + i / 4096u <= t)
             lsm_planner_post_release(&g_pl, h + i / 4096u);
     }
@@ -146,8 +172,9 @@ static void check_applied(uint32_t h, uint32_t *last_blk)
     assert_true(i >= *last_blk);
     assert_true(g_pl.horizon_off == (lsm_real)(i % 64u) / 8);
     assert_true(g_pl.horizon_v == (lsm_real)(i % 1000u));
-    assert_int_equal(g_pl.horizon_end, h + i + 3u);
-    assert_true(g_pl.horizon_end_v == (lsm_real)(i % 512u) / 4);
+    const uint32_t e = end_of(i);
+    assert_int_equal(g_pl.horizon_end, h + e + 3u);
+    assert_true(g_pl.horizon_end_v == (lsm_real)(e % 512u) / 4);
     *last_blk = i;
 }
 

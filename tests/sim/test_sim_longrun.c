@@ -4,7 +4,9 @@
  * - a job longer than the former 3,600 s cap of machine time (G1 X100 at F1: 6,000 s) runs to its end;
  * - a feed hold that nothing resumes is a stall: the run ends with "stalled" about 10 s of machine time after the
  *   machine came to rest, not at a fixed cap;
- * - a hold with a resume pending is waiting, not stalled, however long the wait; so is a dwell (G4 P30).
+ * - a hold with a resume pending is waiting, not stalled, however long the wait; so is a dwell (G4 P30);
+ * - summary_only (run --no-csv) keeps no setpoint (constant memory) and measures the same numbers as a run that
+ *   keeps them: axis v, a, j, deviation, end error and, with the drives, the following error.
  * The machine has a 50 ms cycle so that hours of machine time stay a few hundred thousand cycles.
  */
 #include <setjmp.h>
@@ -34,7 +36,8 @@ static void load(sim_machine *m)
     assert_int_equal(sim_machine_load_text(k_machine, strlen(k_machine), "test", m, err, sizeof err), SIM_MACHINE_OK);
 }
 
-static int run(const char *prog, const sim_run_event *ev, size_t n_ev, sim_run_result *r)
+static int run_opts(const char *prog, const sim_run_event *ev, size_t n_ev, bool drives, bool summary_only,
+                    sim_run_result *r)
 {
     static sim_machine m;
     load(&m);
@@ -46,8 +49,15 @@ static int run(const char *prog, const sim_run_event *ev, size_t n_ev, sim_run_r
     o.planner = SIM_RUN_LISSOM;
     o.events = ev;
     o.n_events = n_ev;
+    o.drives = drives;
+    o.summary_only = summary_only;
     memset(r, 0, sizeof *r);
     return sim_run_program(&o, r);
+}
+
+static int run(const char *prog, const sim_run_event *ev, size_t n_ev, sim_run_result *r)
+{
+    return run_opts(prog, ev, n_ev, false, false, r);
 }
 
 static void test_long_job(void **state)
@@ -106,6 +116,29 @@ static void test_long_dwell_waits(void **state)
     sim_run_free(&r);
 }
 
+static void test_summary_only_same_numbers(void **state)
+{
+    (void)state;
+    static const char prog[] = "G21 G90 G64 P0.05\nG1 X20 F1200\nG1 Y10\nG3 X10 Y20 R10\nG1 X0.5 Y20.3\nG1 X0 Y0\nM2\n";
+    for (int drives = 0; drives < 2; drives++) {
+        sim_run_result a, b;
+        assert_int_equal(run_opts(prog, NULL, 0, drives, false, &a), 0);
+        assert_int_equal(run_opts(prog, NULL, 0, drives, true, &b), 0);
+        assert_true(a.n > 100 && a.q != NULL);
+        assert_true(b.n == 0 && b.q == NULL && b.feed == NULL && b.line == NULL && b.act == NULL);
+        assert_true(a.has_act == (drives != 0) && b.has_act == (drives != 0));
+        assert_true(a.cycles == b.cycles && a.duration_s == b.duration_s);
+        assert_true(a.max_dev_mm == b.max_dev_mm && a.end_error == b.end_error && a.max_dev_mm > 0);
+        for (int k = 0; k < LSM_MAX_AXES; k++) {
+            assert_true(a.max_v[k] == b.max_v[k] && a.max_a[k] == b.max_a[k] && a.max_j[k] == b.max_j[k]);
+            assert_true(a.max_follow_err[k] == b.max_follow_err[k]);
+        }
+        assert_true(a.max_j[0] > 0 && (drives == 0 || a.max_follow_err[0] > 0));
+        sim_run_free(&a);
+        sim_run_free(&b);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -113,6 +146,7 @@ int main(void)
         cmocka_unit_test(test_hold_without_resume_stalls),
         cmocka_unit_test(test_long_hold_with_resume_waits),
         cmocka_unit_test(test_long_dwell_waits),
+        cmocka_unit_test(test_summary_only_same_numbers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

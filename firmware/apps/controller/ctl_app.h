@@ -16,7 +16,8 @@
  *                             finds no room waits for the next tick; while the channel is closed, the frames are
  *                             dropped, as an adapter drops bus traffic nobody opened it for).
  *                        The tick owns the node: nothing else calls it (canopen.h is single-context).
- *   ctl_app_background   the main loop: ctl_motion_background (planner appends, lsm_interp_prepare).
+ *   ctl_app_background   the main loop: ctl_motion_background (the path feed: planner appends,
+ *                        lsm_interp_prepare, the interpolator run ahead of the tick; motion.h, mpipe.h).
  * Why the SDO server runs in the tick: lsm_canopen serves one frame stream in order (an NMT stop followed by an
  * SDO request must find the node stopped), and one context per node is its contract. An SDO request costs a
  * few thousand instructions at most (segmented path blocks included), measured in the tick's worst case

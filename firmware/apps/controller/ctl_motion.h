@@ -46,6 +46,10 @@ void ctl_motion_tick(ctl_motion *m, lsm_canopen *co, uint32_t now_us);
 /* Background work; true when something was done. Main loop. */
 bool ctl_motion_background(ctl_motion *m);
 
+/* The layer's real-time figures for 0x5F00 sub 7 and 8: path underruns (set-points not made in time) and the
+ * fewest set-points ready ahead of a tick while the path moved (0xFFFFFFFF: never moved, or no path). Tick. */
+void ctl_motion_stats(const ctl_motion *m, uint32_t *underruns, uint32_t *min_ahead);
+
 /* The name of the implementation, for the boot banner ("hold", "cia402"). Any context. */
 const char *ctl_motion_name(void);
 

@@ -1,11 +1,9 @@
 /*
  * ctl_motion_cia402.c: ctl_motion.h on the CiA 402 layer of firmware/motion (ctl_motion_cia402.h).
  *
- * Contexts as the layer offers them today: lsm_motion_cycle runs the path feed's background half (block appends,
- * lsm_interp_prepare) inside the control cycle as a synchronous loop (motion.h), so ctl_motion_background has
- * nothing to do and a tick that appends a block or plans a piece carries that work (0x5F00 sub 3 shows it).
- * When the layer offers the split (the appends and lsm_interp_prepare in the background with a hand-off), the
- * background half goes into ctl_motion_background.
+ * Contexts (motion.h): the tick runs lsm_motion_tick (stops, PP, CSP, the path set-point due) and the feedback;
+ * the main loop runs lsm_motion_background (the path feed: appends, lsm_interp_prepare, the interpolator) up to
+ * CTL_MOTION_LEAD_CYCLES cycles ahead of the tick, handed over through the layer's rings (mpipe.h).
  */
 #include "ctl_motion_cia402.h"
 
@@ -33,22 +31,28 @@ lsm_status ctl_motion_init(ctl_motion *m, const ctl_motion_config *cfg, lsm_cano
     mc.feed.capacity = CTL_LOOKAHEAD_BLOCKS;
     mc.feed.saved = m->saved;
     mc.feed.saved_cap = CTL_LOOKAHEAD_BLOCKS + 1u;
+    mc.lead_cycles = CTL_MOTION_LEAD_CYCLES;
     return lsm_motion_init(&m->m, &mc, co);
 }
 
 void ctl_motion_tick(ctl_motion *m, lsm_canopen *co, uint32_t now_us)
 {
-    lsm_motion_cycle(&m->m, co);
+    lsm_motion_tick(&m->m, co);
     lsm_motion_feedback(&m->m, co, NULL, NULL, now_us);
 }
 
 bool ctl_motion_background(ctl_motion *m)
 {
-    (void)m;
-    return false;
+    return lsm_motion_background(&m->m);
+}
+
+void ctl_motion_stats(const ctl_motion *m, uint32_t *underruns, uint32_t *min_ahead)
+{
+    *underruns = m->m.tk.underruns;
+    *min_ahead = m->m.tk.min_ahead == 0u ? 0xFFFFFFFFu : m->m.tk.min_ahead - 1u;
 }
 
 const char *ctl_motion_name(void)
 {
-    return "cia402 (firmware/motion, path feed synchronous in the tick)";
+    return "cia402 (firmware/motion: tick / background split)";
 }

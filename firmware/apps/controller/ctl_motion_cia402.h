@@ -16,6 +16,13 @@
 #define CTL_LOOKAHEAD_BLOCKS 64u /* as lissom-node's default (--lookahead): 5.9 KB of planner blocks */
 #endif
 
+#ifndef CTL_MOTION_LEAD_CYCLES
+/* Path set-points the background computes ahead of the tick (motion.h lead_cycles): room for its longest stretch
+ * without one (a piece plan, up to 1.26 M instructions = 7.5 ticks of 168 k, plus a few block appends) with margin;
+ * the price is the latency of a path command (hold, override) by as many cycles: 24 ms. */
+#define CTL_MOTION_LEAD_CYCLES 24u
+#endif
+
 struct ctl_motion {
     lsm_motion m;
     lsm_pblock blocks[CTL_LOOKAHEAD_BLOCKS];

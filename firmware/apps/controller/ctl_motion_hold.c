@@ -66,3 +66,10 @@ const char *ctl_motion_name(void)
 {
     return "hold (interim: no motion layer linked)";
 }
+
+void ctl_motion_stats(const ctl_motion *m, uint32_t *underruns, uint32_t *min_ahead)
+{
+    (void)m;
+    *underruns = 0u;
+    *min_ahead = 0xFFFFFFFFu;
+}

@@ -63,6 +63,15 @@ typedef struct wstat {
 } wstat;
 
 static wstat g_w_corner, g_w_fit, g_w_piece;
+static wstat g_w_size, g_w_phase;
+static volatile bool g_w_ramp_on;
+/* inside lsm_planner_plan_piece: its ramp verifications (planner stats), and in lissom-bench-ramp.elf its ramp
+ * sizing and phase evaluation (g_w_psize, g_w_pphase) */
+static volatile bool g_in_piece;
+static uint32_t g_piece_checks;
+#ifdef BENCH_RAMP_WRAP
+static wstat g_w_psize, g_w_pphase;
+#endif
 
 static void wadd(wstat *w, uint32_t c)
 {
@@ -105,14 +114,15 @@ lsm_status __wrap_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real
 lsm_status __wrap_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
                                          lsm_piece_mode mode, lsm_piece *out)
 {
+    const uint32_t ch0 = pl->stats.checks;
+    g_in_piece = true;
     const uint32_t t0 = now();
     const lsm_status r = __real_lsm_planner_plan_piece(pl, blk, off_mm, v0_mm_s, mode, out);
     wadd(&g_w_piece, since(t0));
+    g_in_piece = false;
+    g_piece_checks += pl->stats.checks - ch0;
     return r;
 }
-
-static wstat g_w_size, g_w_phase;
-static volatile bool g_w_ramp_on;
 
 #ifdef BENCH_RAMP_WRAP
 /* Only in lissom-bench-ramp.elf (these wrappers would add instructions to every figure of lissom-bench.elf):
@@ -125,11 +135,11 @@ bool __wrap_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real c
 bool __wrap_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
                                         lsm_scurve_intervals *out)
 {
-    if (!g_w_ramp_on)
+    if (!g_w_ramp_on && !g_in_piece)
         return __real_lsm_scurve_strict_intervals(lim, cycle_s, dv_mm_s, out);
     const uint32_t t0 = now();
     const bool r = __real_lsm_scurve_strict_intervals(lim, cycle_s, dv_mm_s, out);
-    wadd(&g_w_size, since(t0));
+    wadd(g_in_piece ? &g_w_psize : &g_w_size, since(t0));
     return r;
 }
 
@@ -137,13 +147,13 @@ void __real_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *
 void __wrap_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out);
 void __wrap_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out)
 {
-    if (!g_w_ramp_on) {
+    if (!g_w_ramp_on && !g_in_piece) {
         __real_lsm_phase_end(ph, cycle_s, start, out);
         return;
     }
     const uint32_t t0 = now();
     __real_lsm_phase_end(ph, cycle_s, start, out);
-    wadd(&g_w_phase, since(t0));
+    wadd(g_in_piece ? &g_w_pphase : &g_w_phase, since(t0));
 }
 
 void __real_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
@@ -152,13 +162,13 @@ void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_k
                               lsm_kin *out);
 void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out)
 {
-    if (!g_w_ramp_on) {
+    if (!g_w_ramp_on && !g_in_piece) {
         __real_lsm_phase_advance(ph, cycle_s, start, tau_s, out);
         return;
     }
     const uint32_t t0 = now();
     __real_lsm_phase_advance(ph, cycle_s, start, tau_s, out);
-    wadd(&g_w_phase, since(t0));
+    wadd(g_in_piece ? &g_w_pphase : &g_w_phase, since(t0));
 }
 #endif
 
@@ -614,6 +624,11 @@ static bool bench_append(void)
     memset(&g_w_corner, 0, sizeof g_w_corner);
     memset(&g_w_fit, 0, sizeof g_w_fit);
     memset(&g_w_piece, 0, sizeof g_w_piece);
+    g_piece_checks = 0;
+#ifdef BENCH_RAMP_WRAP
+    memset(&g_w_psize, 0, sizeof g_w_psize);
+    memset(&g_w_pphase, 0, sizeof g_w_pphase);
+#endif
     astat as;
     memset(&as, 0, sizeof as);
     memset(ks, 0, sizeof ks);
@@ -676,6 +691,16 @@ static bool bench_append(void)
              (int32_t)(g_w_fit.max_counts * 40u), NULL);
     out_line("planner_plan_piece", mean_x100(g_w_piece.counts, g_w_piece.calls, 0u), "piece", g_w_piece.calls,
              (int32_t)(g_w_piece.max_counts * 40u), NULL);
+    /* where a piece's instructions go: its ramp verifications (planner stats), and in lissom-bench-ramp.elf the
+     * ramp sizing and phase evaluation inside it, per piece and per call */
+    out_line("planner_plan_piece_checks", g_w_piece.calls ? g_piece_checks * 100u / g_w_piece.calls : 0u, "piece",
+             g_w_piece.calls, -1, "what=ramp_verifications_x1");
+#ifdef BENCH_RAMP_WRAP
+    out_line("planner_plan_piece_ramp_sizing", mean_x100(g_w_psize.counts, g_w_piece.calls, 0u), "piece",
+             g_w_psize.calls, (int32_t)(g_w_psize.max_counts * 40u), NULL);
+    out_line("planner_plan_piece_phase_eval", mean_x100(g_w_pphase.counts, g_w_piece.calls, 0u), "piece",
+             g_w_pphase.calls, (int32_t)(g_w_pphase.max_counts * 40u), NULL);
+#endif
     out_line("planner_full_backward_pass", as.full_pass_counts * 4000u, "call", 1u, -1, NULL);
     cm_out_str("note append_bp_nodes_per_block=");
     cm_out_fixed((int32_t)(as.n ? (as.bp_nodes * 100u + as.n / 2u) / as.n : 0u), 2);

@@ -7,8 +7,9 @@
  *   tick        SysTick, highest priority, every CTL_TICK_INSTR instructions (below): ctl_app_tick (the host's slcan
  *               lines -> the node, lsm_canopen_process, ctl_motion_tick, the node's frames -> UART), the 0x5F00
  *               statistics, the outputs (FPGA LEDs: drive enable, in position);
- *   background  the main loop: ctl_app_background (the motion layer's planning); when it has nothing to do it
- *               sleeps in WFI until the next interrupt.
+ *   background  the main loop: ctl_app_background (the motion layer's path feed: block appends,
+ *               lsm_interp_prepare, the interpolator run ahead of the tick, motion.h); when it has nothing to do
+ *               it sleeps in WFI until the next interrupt. It never touches the node; the tick never waits on it.
  *   UART 0's RX and TX interrupts (below the tick) only move characters between the UART and two rings.
  *
  * Time. The image models a 168 MHz Cortex-M4 executing one instruction per cycle: a 1 ms control cycle is
@@ -127,6 +128,7 @@ static void tick(void *ctx)
     st.bg_load_permille = g_load.load_permille;
     const uint32_t now_us = clock_us();
     st.clock_ms = now_us / 1000u;
+    ctl_motion_stats(&g_motion, &st.path_underruns, &st.path_min_ahead);
     bool estop = true;
     if (lsm_port_gpio_read(LSM_GPIO_IN_ESTOP, &estop) != LSM_OK)
         estop = true; /* fail-safe: an unreadable input stops */

@@ -10,6 +10,8 @@
 #else
 #define BISECT_ITER 32
 #endif
+/* False position's smallest step, as a fraction of the bracket: keeps it shrinking when d is far from linear. */
+#define FALSEPOS_MIN LSM_R(0.02)
 
 typedef struct shape {
     lsm_scurve_intervals acc, dec;
@@ -37,15 +39,25 @@ static bool ramp_fits(const lsm_axis_limits *L, lsm_real dt, const lsm_scurve_in
     return lsm_scurve_fits(&sl, dt, iv, dv);
 }
 
-/* Distance of the two quantised ramps v0 -> vp -> v1 (mm), or -1 on overflow. */
-static lsm_real ramps_distance(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real vp, lsm_real v1,
-                               lsm_scurve_rule rule)
+/* Distance of the two quantised ramps v0 -> vp -> v1 (mm), or -1 on overflow; their intervals in *sh (nc
+ * untouched). With v0 = v1 (from rest to rest) both ramps are the same velocity change: sized once. */
+static lsm_real ramps_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real vp, lsm_real v1,
+                            lsm_scurve_rule rule, shape *sh)
 {
-    lsm_scurve_intervals a, d;
-    if (!ramp(L, dt, vp - v0, rule, &a) || !ramp(L, dt, vp - v1, rule, &d))
+    if (!ramp(L, dt, vp - v0, rule, &sh->acc))
         return -1;
-    return ((v0 + vp) * (lsm_real)lsm_scurve_total_cycles(&a) + (vp + v1) * (lsm_real)lsm_scurve_total_cycles(&d)) *
+    if (v1 == v0)
+        sh->dec = sh->acc;
+    else if (!ramp(L, dt, vp - v1, rule, &sh->dec))
+        return -1;
+    return ((v0 + vp) * (lsm_real)lsm_scurve_total_cycles(&sh->acc) +
+            (vp + v1) * (lsm_real)lsm_scurve_total_cycles(&sh->dec)) *
            dt / 2;
+}
+
+static bool iv_equal(const lsm_scurve_intervals *a, const lsm_scurve_intervals *b)
+{
+    return a->n1_cycles == b->n1_cycles && a->n2_cycles == b->n2_cycles && a->n4_cycles == b->n4_cycles;
 }
 
 static lsm_scurve_intervals iv_max(const lsm_scurve_intervals *a, const lsm_scurve_intervals *b)
@@ -57,33 +69,64 @@ static lsm_scurve_intervals iv_max(const lsm_scurve_intervals *a, const lsm_scur
     return r;
 }
 
-/* The minimal-time shape of one axis alone (before the exact fit); *vp_out gets its peak feed. */
+/*
+ * The minimal-time shape of one axis alone (before the exact fit); *vp_out gets its peak feed. The peak is
+ * bisected on the distance of the quantised ramps, which is non-decreasing in it; only the ramps' intervals
+ * matter downstream (window_nc and fit solve the cruise feed exactly for given intervals), so the bisection
+ * stops as soon as both ends of its bracket have the same intervals.
+ */
 static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1,
                                lsm_scurve_rule rule, shape *sh, lsm_real *vp_out)
 {
     const lsm_real vlo = lsm_max2(v0, v1);
-    const lsm_real d_lo = ramps_distance(L, dt, v0, vlo, v1, rule);
+    shape s_lo, s_hi;
+    const lsm_real d_lo = ramps_shape(L, dt, v0, vlo, v1, rule, &s_lo);
     if (d_lo < 0)
         return LSM_E_TOO_LONG;
     if (d_lo > D)
         return LSM_E_INFEASIBLE;
-    lsm_real vp = L->v_max_mm_s;
-    const lsm_real d_hi = ramps_distance(L, dt, v0, vp, v1, rule);
-    if (d_hi < 0 || d_hi > D) {
+    lsm_real vp = L->v_max_mm_s, dist = ramps_shape(L, dt, v0, vp, v1, rule, &s_hi);
+    if (dist < 0 || dist > D) {
         lsm_real lo = vlo, hi = vp; /* d(lo) <= D < d(hi); d is non-decreasing in vp */
+        bool hi_sized = dist >= 0;  /* s_hi holds hi's intervals (not an overflow) */
+        /* false position (Illinois) on d(vp) - D while hi is sized, else halving: d is close to smooth between
+         * the jumps of the whole-cycle intervals, so the bracket closes on one interval set in a few steps */
+        lsm_real f_lo = d_lo - D, f_hi = hi_sized ? dist - D : 0;
+        int side = 0; /* which end the last step moved: -1 lo, +1 hi */
+        dist = d_lo;
         for (int i = 0; i < BISECT_ITER && hi - lo > LSM_REAL_EPS * hi; i++) {
-            const lsm_real mid = (lo + hi) / 2;
-            const lsm_real dm = ramps_distance(L, dt, v0, mid, v1, rule);
-            if (dm >= 0 && dm <= D)
+            if (hi_sized && iv_equal(&s_lo.acc, &s_hi.acc) && iv_equal(&s_lo.dec, &s_hi.dec))
+                break; /* every peak in the bracket has these intervals */
+            lsm_real frac = LSM_R(0.5);
+            if (hi_sized && f_hi > f_lo)
+                frac = lsm_min2(lsm_max2(-f_lo / (f_hi - f_lo), FALSEPOS_MIN), 1 - FALSEPOS_MIN);
+            const lsm_real mid = lo + (hi - lo) * frac;
+            shape s_mid;
+            const lsm_real dm = ramps_shape(L, dt, v0, mid, v1, rule, &s_mid);
+            if (dm >= 0 && dm <= D) {
                 lo = mid;
-            else
+                s_lo = s_mid;
+                dist = dm;
+                f_lo = dm - D;
+                if (side < 0)
+                    f_hi /= 2; /* Illinois: the far end has not moved twice, halve its weight */
+                side = -1;
+            } else {
                 hi = mid;
+                s_hi = s_mid;
+                hi_sized = dm >= 0;
+                f_hi = dm - D;
+                if (side > 0)
+                    f_lo /= 2;
+                side = 1;
+            }
         }
         vp = lo;
+        s_hi = s_lo;
     }
-    if (!ramp(L, dt, vp - v0, rule, &sh->acc) || !ramp(L, dt, vp - v1, rule, &sh->dec))
-        return LSM_E_TOO_LONG;
-    const lsm_real rest = D - ramps_distance(L, dt, v0, vp, v1, rule);
+    sh->acc = s_hi.acc;
+    sh->dec = s_hi.dec;
+    const lsm_real rest = D - dist;
     lsm_real nc = 0;
     if (vp > 0 && rest > 0) {
         nc = lsm_ceil(rest / (vp * dt));
@@ -123,25 +166,58 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
     lsm_real nhi = lo_v > 0 ? lsm_floor((num / lo_v - base) / dt) : (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
     if (!(nhi < (lsm_real)(LSM_MOVE_MAX_CYCLES - 1)))
         nhi = (lsm_real)(LSM_MOVE_MAX_CYCLES - 1);
-    for (lsm_real n = nlo; n <= nhi && n < nlo + 3; n++) { /* rounding at the window's edge: check exactly */
-        const lsm_real vc = num / (base + n * dt);
+    if (!(nlo <= nhi))
+        return false; /* (also a window beyond the cycle counter) */
+    /* integer counts: in float, a real n + 1 stops changing above 2^24 */
+    const uint32_t k0 = (uint32_t)nlo, k1 = (uint32_t)nhi;
+    for (uint32_t n = k0; n <= k1 && n - k0 < 3; n++) { /* rounding at the window's edge: check exactly */
+        const lsm_real vc = num / (base + (lsm_real)n * dt);
         if (vc > 0 && vc <= L->v_max_mm_s && ramp_fits(L, dt, &sh->acc, vc - v0, LSM_SCURVE_RULE_STRICT) &&
             ramp_fits(L, dt, &sh->dec, vc - v1, LSM_SCURVE_RULE_STRICT)) {
-            sh->nc = (uint32_t)n;
+            sh->nc = n;
             return true;
         }
     }
     return false;
 }
 
+/* The fallback's cruise-feed candidates (see single_plan). */
+#define ALT_ABOVE 4 /* peaks between vp* and v_max */
+#define ALT_GRID 32 /* an even grid of feeds from max(v0, v1) down to 0 */
+#define ALT_NEAR 24 /* per end feed, feeds 2^-1 .. 2^-24 of the way from it to the other end feed or to 0 */
+#define ALT_PEAKS (ALT_ABOVE + ALT_GRID + 4 * ALT_NEAR)
+
+/* Candidate k of the fallback: a cruise feed in [0, v_max]. */
+static lsm_real alt_peak(int k, lsm_real vp, lsm_real v0, lsm_real v1, lsm_real vmax)
+{
+    static const lsm_real up[ALT_ABOVE] = {LSM_R(0.03125), LSM_R(0.125), LSM_R(0.5), LSM_R(1.0)};
+    if (k < ALT_ABOVE)
+        return vp + (vmax - vp) * up[k];
+    k -= ALT_ABOVE;
+    const lsm_real vtop = lsm_max2(v0, v1);
+    if (k < ALT_GRID)
+        return vtop * (lsm_real)(ALT_GRID - 1 - k) / ALT_GRID;
+    k -= ALT_GRID;
+    /* close to an end feed e, towards the other end feed o or towards 0: a cruise that lingers near the start or
+     * end feed (the quantised ramp between them then absorbs the distance the direct ramp leaves over) */
+    const int which = k / ALT_NEAR, step = k % ALT_NEAR + 1;
+    const lsm_real e = (which & 1) ? v1 : v0;
+    const lsm_real o = (which & 2) ? 0 : ((which & 1) ? v0 : v1);
+    lsm_real f = 1;
+    for (int i = 0; i < step; i++)
+        f /= 2; /* exact powers of two */
+    return e + (o - e) * f;
+}
+
 /*
  * One axis alone, strict rule: the fastest whole-cycle shape that lands exactly on D. Tries the minimal-time
- * peak vp* first (the usual answer), then peaks above it (ramps with more velocity capacity, for short moves
- * between non-zero feeds whose remainder of a cycle a short ramp cannot absorb), then cruise feeds between
- * and below the end feeds, each also with its ramps stretched at T4 (more capacity for a little more time);
- * keeps the shortest that fits.
+ * peak vp* first (the usual answer). Otherwise (short moves between feeds whose remainder a quantised ramp
+ * cannot absorb) it tries other cruise feeds: peaks above vp* (ramps with more velocity capacity), an even grid
+ * below max(v0, v1), and feeds geometrically close to each end feed (a cruise lingering just above or below v0
+ * or v1, the only exact shapes when D exceeds the direct ramp's distance by less than a short ramp travels at
+ * the far feed), each also with its ramps stretched at T4 (more capacity for a little more time); keeps the
+ * shortest that fits.
  */
-#define ALT_PEAKS 36
 static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
 {
     lsm_real vp;
@@ -150,13 +226,11 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
         return st;
     if (window_nc(L, dt, D, v0, v1, best))
         return LSM_OK;
-    const lsm_real vtop = lsm_max2(v0, v1), vmax = L->v_max_mm_s;
-    static const lsm_real up[4] = {LSM_R(0.03125), LSM_R(0.125), LSM_R(0.5), LSM_R(1.0)};
     uint64_t best_total = UINT64_MAX;
     /* a ramp lengthened at T4 gains velocity capacity linearly, at a small cost in time */
     static const uint32_t stretch[4] = {0, 2, 8, 32};
     for (int k = 0; k < ALT_PEAKS; k++) {
-        const lsm_real p = k < 4 ? vp + (vmax - vp) * up[k] : vtop * (lsm_real)(ALT_PEAKS - 1 - k) / (ALT_PEAKS - 4);
+        const lsm_real p = alt_peak(k, vp, v0, v1, L->v_max_mm_s);
         shape base;
         if (!ramp(L, dt, p - v0, LSM_SCURVE_RULE_STRICT, &base.acc) ||
             !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
@@ -178,8 +252,6 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
                 }
             }
         }
-        if (best_total < UINT64_MAX && k >= 3)
-            break; /* the peaks above vp* are tried in full; below them, the first (highest) that fits wins */
     }
     return best_total < UINT64_MAX ? LSM_OK : LSM_E_INFEASIBLE;
 }

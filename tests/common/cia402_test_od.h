@@ -54,10 +54,10 @@ static inline void od_pp_go(lsm_canopen *co, uint32_t now_us, unsigned k, int32_
     od_set(co, now_us, AX(0x6040, k), 0, 0x2F);
 }
 
-/* One 0x5010 path block (type 1 line, 2/3 arc with a centre in X Y; 3 axes; tolerance 10 um) through the
+/* One 0x5010 path block (type 1 line, 2/3 arc with a centre in X Y; 3 axes; blend tolerance tol_um) through the
  * dictionary's hook, like the SDO download. Returns the abort code (0: taken). */
-static inline uint32_t od_path_block(lsm_canopen *co, uint32_t seq, uint8_t type, const int32_t end[3],
-                                     const int32_t *centre, uint32_t feed_um_s)
+static inline uint32_t od_path_block_tol(lsm_canopen *co, uint32_t seq, uint8_t type, const int32_t end[3],
+                                         const int32_t *centre, uint32_t feed_um_s, uint32_t tol_um)
 {
     uint8_t b[40];
     size_t n = 16 + 12 + (type != 1 ? 8 : 0);
@@ -66,7 +66,7 @@ static inline uint32_t od_path_block(lsm_canopen *co, uint32_t seq, uint8_t type
     b[4] = type;
     b[6] = 3;
     lsm_can_put_u32(&b[8], feed_um_s);
-    lsm_can_put_u32(&b[12], 10);
+    lsm_can_put_u32(&b[12], tol_um);
     for (int k = 0; k < 3; k++)
         lsm_can_put_u32(&b[16 + 4 * k], (uint32_t)end[k]);
     if (type != 1) {
@@ -76,6 +76,13 @@ static inline uint32_t od_path_block(lsm_canopen *co, uint32_t seq, uint8_t type
     lsm_co_od_ref ref;
     assert_int_equal(lsm_co_od_find(lsm_canopen_od(co), 0x5010, 0, &ref), 0);
     return lsm_co_od_write(lsm_canopen_od(co), &ref, b, n);
+}
+
+/* od_path_block_tol with a 10 um tolerance. */
+static inline uint32_t od_path_block(lsm_canopen *co, uint32_t seq, uint8_t type, const int32_t end[3],
+                                     const int32_t *centre, uint32_t feed_um_s)
+{
+    return od_path_block_tol(co, seq, type, end, centre, feed_um_s, 10u);
 }
 
 /* Frames with this id among sent[0..n); for the EMCY id of node `nid`, only those with this error code. */

@@ -30,6 +30,7 @@
 #include <cmocka.h>
 
 #include "canopen.h"
+#include "cia402_test_od.h"
 #include "lsm_test_rng.h"
 #include "motion.h"
 
@@ -110,23 +111,7 @@ static uint32_t write_block(uint32_t i)
     int32_t end[3], centre[2] = {0, 0};
     uint32_t feed;
     program_block(i, &type, end, centre, &feed);
-    uint8_t b[40];
-    const size_t n = 16 + 12 + (type != 1 ? 8 : 0);
-    memset(b, 0, sizeof b);
-    lsm_can_put_u32(&b[0], i);
-    b[4] = type;
-    b[6] = 3;
-    lsm_can_put_u32(&b[8], feed);
-    lsm_can_put_u32(&b[12], 20);
-    for (int k = 0; k < 3; k++)
-        lsm_can_put_u32(&b[16 + 4 * k], (uint32_t)end[k]);
-    if (type != 1) {
-        lsm_can_put_u32(&b[28], (uint32_t)centre[0]);
-        lsm_can_put_u32(&b[32], (uint32_t)centre[1]);
-    }
-    lsm_co_od_ref ref;
-    assert_int_equal(lsm_co_od_find(lsm_canopen_od(&g_app.co), 0x5010, 0, &ref), 0);
-    return lsm_co_od_write(lsm_canopen_od(&g_app.co), &ref, b, n);
+    return od_path_block_tol(&g_app.co, i, type, end, centre, feed, 20u);
 }
 
 /* The events of tick n, in the tick context: blocks while the node's buffer has room, commands at fixed ticks. */

@@ -51,6 +51,11 @@ SW_OPERATION_ENABLED = 0x27
 # than usual) a read of 0x6041 was answered on the bus 1 ms after its request (candump log) and still not
 # delivered to python-canopen's SDO client 2 s later; 2 s was too short there.
 SDO_TIMEOUT_S = 5.0
+# Bounds of python-canopen's CiA 402 waits (a state change, a mode change, a fresh statusword TPDO). Its defaults
+# (0.2-0.8 s) are shorter than the node's ticks run late on a loaded machine (220 ms seen in a QEMU guest beside
+# stress-ng), and a load run failed "Timeout waiting for updated statusword". Each wait ends on the event: the bound
+# only says when to give up.
+P402_WAIT_S = 10.0
 
 # the node's built-in machine (host_sim/node/node_app.c): used when no machine file is given
 BUILTIN_LIMITS = {"v": 250.0, "a": 3000.0, "j": 60000.0, "snap": 1.18e7}
@@ -238,6 +243,9 @@ class Rig:
             raise RuntimeError("no boot-up frame from node %d on %s" % (self.cfg.node_id, self.cfg.iface))
         self.node = BaseNode402(self.cfg.node_id, EDS)
         self.node.sdo.RESPONSE_TIMEOUT = SDO_TIMEOUT_S
+        for name in ("TIMEOUT_SWITCH_OP_MODE", "TIMEOUT_SWITCH_STATE_FINAL", "TIMEOUT_SWITCH_STATE_SINGLE",
+                     "TIMEOUT_CHECK_TPDO"):
+            setattr(self.node, name, P402_WAIT_S)
         self.network.add_node(self.node)
         self._pdo_ready = False
         # positions are relative to where the axes are now (a board keeps its positions across NMT resets)

@@ -45,8 +45,11 @@ def test_csp(rig):
         rig.network.send_message(0x80, b"")
         next_t += PERIOD_S
         time.sleep(max(0.0, next_t - time.monotonic()))
-    # the node applies each target at its SYNC; after the last period the demand is the last target
-    time.sleep(0.05)
+    # the node applies each target at its SYNC; one interpolation period (10 of the node's cycles) after the last
+    # SYNC the demand is the last target, exactly, and stays there. Waited for as an event: under load the node's
+    # 1 ms ticks run late (overruns are skipped), so 10 cycles can take far longer than 10 ms of wall time.
+    rig.wait_until(lambda: rig.demand(0) == xs[-1] and rig.demand(1) == ys[-1], 20.0,
+                   "the demand did not reach the last CSP target (%d, %d)" % (xs[-1], ys[-1]))
     assert rig.demand(0) == xs[-1]
     assert rig.demand(1) == ys[-1]
     assert len(rig.frames.emcy(nid, m)) == 0, "EMCY during CSP: %s" % rig.frames.emcy(nid, m)
@@ -65,8 +68,8 @@ def test_csp(rig):
             rig.network.send_message(0x200 + nid, struct.pack("<H", 0x000B))
         next_t = time.monotonic() + PERIOD_S
         time.sleep(max(0.0, next_t - time.monotonic()))
-    time.sleep(0.2)
-    assert rig.state_of(0) == "SWITCH ON DISABLED"  # quick-stop option 2: stop, then transition 12
+    # quick-stop option 2: stop, then transition 12 (an event: the stop takes its cycles however late they run)
+    rig.wait_until(lambda: rig.state_of(0) == "SWITCH ON DISABLED", 20.0, "no SWITCH ON DISABLED after the quick stop")
     stopped = rig.demand(0)
     assert stopped < int(round((x0 + V_MM_S * PERIOD_S * 39) * cpm)), "targets after the quick stop were applied"
 

@@ -103,15 +103,24 @@ def test_stream_program(rig, tmp_path):
         for k in range(3):
             bad = check_limits(tr.axis(k, "set_mm"), tr.cycle_s, lim["v"], lim["a"], lim["j"], what="axis %d" % k)
             assert not bad, bad
-        # an exact stop on the end of the G3 (X10 Y20) before the dwell: at rest there, feed 0, for a run of cycles
-        # (the node's cycles are not wall time on a loaded host: it counts overruns, so the length is checked below)
+        # an exact stop on the end of the G3 (X10 Y20) before the dwell: at rest there, feed 0, for the whole dwell.
+        # The dwell is wall time on the master (G4 P0.3: the tool waits 0.3 s, then sends the next block), so the
+        # rest is measured on the node's own clock (t_real_s, the port's monotonic clock at each cycle), not in
+        # cycles: on a loaded host the node's 1 ms ticks run late and overruns are skipped, so 0.3 s can hold far
+        # fewer than 300 cycles. From the first cycle at rest to the first cycle after the rest >= 0.3 s.
         x, y = tr.axis(0, "set_mm"), tr.axis(1, "set_mm")
         at = (np.abs(x - 10) < 1e-9) & (np.abs(y - 20) < 1e-9) & (tr["feed_mm_s"] == 0)
-        longest, run = 0, 0
-        for v in at:
-            run = run + 1 if v else 0
-            longest = max(longest, run)
-        assert longest * tr.cycle_s >= 0.1, "rest of %.3f s at the dwell" % (longest * tr.cycle_s)
+        t_real = tr["t_real_s"]
+        wrap_s = 2.0 ** 32 * 1e-6  # the port's clock is a uint32 of microseconds
+        longest, start = 0.0, None
+        for i, v in enumerate(at):
+            if v and start is None:
+                start = i
+            elif not v and start is not None:
+                longest = max(longest, (t_real[i] - t_real[start]) % wrap_s)
+                start = None
+        assert start is None, "the trace ends at rest on the dwell's point (the program's next block never ran)"
+        assert longest >= 0.3, "rest of %.3f s (node's clock) at a dwell of 0.3 s" % longest
         tr.write_csv(rig.out("stream_trace.csv"), decimate=2)
 
 

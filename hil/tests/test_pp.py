@@ -54,9 +54,9 @@ def _move_and_check(rig, tel, target, ptype, name):
     assert mv is not None
     start, end = mv
     # The telemetry, on the node's clock: every sampled demand is one the node had during this move, in order.
-    # (The SYNC time stamps are the master's wall clock; a node whose 1 ms ticks run late on a loaded host catches
-    # up in bursts, so a velocity from them is not the node's: 277 mm/s "seen" on a 100 mm/s move in a load run.
-    # The velocity limit itself is checked exactly per cycle below.)
+    # (The SYNC time stamps are the master's wall clock; on a loaded host neither the SYNCs nor the node's 1 ms
+    # ticks keep to it, so a velocity from them is not the node's: 277 mm/s "seen" on a 100 mm/s move in a load
+    # run. The velocity limit itself is checked exactly per cycle below.)
     sgn = 1.0 if target * cpm >= s["X_set"][0] else -1.0
     counts = sgn * np.round(np.asarray(p[max(start - 1, 0):]) * cpm)  # non-decreasing over the move
     at = np.searchsorted(counts, sgn * s["X_set"], side="left")

@@ -146,6 +146,19 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
     return LSM_OK;
 }
 
+/* Plans a jerk-limited stop from the axis's present state and switches to it (IDLE at once if already at rest). */
+static lsm_status start_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
+{
+    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
+    if (st != LSM_OK)
+        return st;
+    p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+    p->stop_kind = kind;
+    if (p->mode == LSM_AXPROF_IDLE)
+        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+    return LSM_OK;
+}
+
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
 {
     p->have_after = false;
@@ -166,14 +179,7 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
         p->stop_kind = kind; /* the running stop is already at least as fast */
         return LSM_OK;
     }
-    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
-    if (st != LSM_OK)
-        return st;
-    p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
-    p->stop_kind = kind;
-    if (p->mode == LSM_AXPROF_IDLE)
-        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
-    return LSM_OK;
+    return start_stop(p, lim, kind);
 }
 
 lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
@@ -182,14 +188,7 @@ lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, ui
         p->defer = AXPROF_DEFER_NONE;                     /* a deferred halt or retarget is superseded by this stop */
     if (p->mode == LSM_AXPROF_MOVE && in_jerk_pulse(p)) { /* start now: jstop releases the jerk in progress */
         p->have_after = false;
-        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
-        if (st != LSM_OK)
-            return st;
-        p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
-        p->stop_kind = kind;
-        if (p->mode == LSM_AXPROF_IDLE)
-            p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
-        return LSM_OK;
+        return start_stop(p, lim, kind);
     }
     return lsm_axprof_stop(p, lim, kind);
 }

@@ -853,68 +853,8 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y ? 1 : 0;
 }
 
-/*
- * What VPOp's motion asks of each axis between its samples: VPOp holds the limits on the backward differences of
- * the samples only (Beudaert eq 6). At every sample, with the path derivatives of the geometry at s_k (exact
- * tangent q_s and curvature vector q_ss, q_sss from a central difference of q_ss within the block) and s', s'',
- * s''' from central differences of the planned s_k, the continuous jerk of axis i is
- *     q_i''' = q_s,i s''' + 3 q_ss,i s' s'' + q_sss,i s'^3          (Beudaert eq 3)
- * Reported: the largest and the 99th percentile over the samples of max_i |q_i'''| / J_i (X Y Z). The real-time
- * planner holds this continuous jerk (planner.h), so this tells how much of VPOp's lead comes from the samples.
- */
-static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt,
-                             sim_run_result *r)
-{
-    r->intersample_jerk_max = r->intersample_jerk_p99 = -1;
-    if (n < 5)
-        return;
-    double *ratio = malloc(n * sizeof *ratio);
-    if (!ratio)
-        return;
-    size_t m = 0;
-    for (size_t k = 2; k + 2 < n; k++) {
-        const double v = (S[k + 1] - S[k - 1]) / (2 * dt);
-        const double a = (S[k + 1] - 2 * S[k] + S[k - 1]) / (dt * dt);
-        const double j = (S[k + 2] - 2 * S[k + 1] + 2 * S[k - 1] - S[k - 2]) / (2 * dt * dt * dt);
-        size_t lo = 0, hi = gp->n;
-        while (hi - lo > 1) {
-            const size_t mid = (lo + hi) / 2;
-            if (gp->s0[mid] <= S[k])
-                lo = mid;
-            else
-                hi = mid;
-        }
-        const lsm_geom *g = &gp->g[lo];
-        const double len = (double)g->len, u = S[k] - gp->s0[lo];
-        lsm_real pos[LSM_MAX_AXES] = {0}, t[3], c[3], c1[3], c2[3];
-        lsm_geom_eval(g, (lsm_real)u, pos, t, c);
-        double q3[3] = {0, 0, 0};
-        if (g->kind != LSM_GEOM_LINE) {
-            const double h = fmin(1e-4, 0.25 * len);
-            const double ua = fmax(0, u - h), ub = fmin(len, u + h);
-            lsm_geom_eval(g, (lsm_real)ua, pos, NULL, c1);
-            lsm_geom_eval(g, (lsm_real)ub, pos, NULL, c2);
-            for (int i = 0; i < 3; i++)
-                q3[i] = ub > ua ? ((double)c2[i] - (double)c1[i]) / (ub - ua) : 0;
-        }
-        double worst = 0;
-        for (int i = 0; i < 3; i++) {
-            if (!(lim->axis_mask & (1u << i)) || !(lim->j[i] > 0))
-                continue;
-            const double qs = g->kind == LSM_GEOM_LINE ? (double)g->u.line.dir[i] : (double)t[i];
-            const double jc = qs * j + 3 * (double)c[i] * v * a + q3[i] * v * v * v;
-            worst = fmax(worst, fabs(jc) / lim->j[i]);
-        }
-        ratio[m++] = worst;
-    }
-    qsort(ratio, m, sizeof *ratio, cmp_double);
-    r->intersample_jerk_max = m ? ratio[m - 1] : 0;
-    r->intersample_jerk_p99 = m ? ratio[(size_t)(0.99 * (double)(m - 1))] : 0;
-    free(ratio);
-}
-
-/* max_i |d³q_i/dt³| / J_i of the motion at path point s with s' = v, s'' = a, s''' = j (Beudaert eq 3; the geometry
- * as in vpop_intersample), against the limits lim. */
+/* max_i |d³q_i/dt³| / J_i of the motion at path point s with s' = v, s'' = a, s''' = j (Beudaert eq 3: exact
+ * tangent and curvature vector of the geometry, q_sss from a central difference of q_ss within the block), against the limits lim. */
 static double vp_jerk_ratio(const gpath *gp, const sim_vpop_limits *lim, double s, double v, double a, double j)
 {
     size_t lo = 0, hi = gp->n;
@@ -946,6 +886,37 @@ static double vp_jerk_ratio(const gpath *gp, const sim_vpop_limits *lim, double 
         worst = fmax(worst, fabs(qs * j + 3 * (double)c[i] * v * a + q3[i] * v * v * v) / lim->j[i]);
     }
     return worst;
+}
+
+/*
+ * What VPOp's motion asks of each axis between its samples: VPOp holds the limits on the backward differences of
+ * the samples only (Beudaert eq 6). At every sample, with the path derivatives of the geometry at s_k (exact
+ * tangent q_s and curvature vector q_ss, q_sss from a central difference of q_ss within the block) and s', s'',
+ * s''' from central differences of the planned s_k, the continuous jerk of axis i is
+ *     q_i''' = q_s,i s''' + 3 q_ss,i s' s'' + q_sss,i s'^3          (Beudaert eq 3)
+ * Reported: the largest and the 99th percentile over the samples of max_i |q_i'''| / J_i (X Y Z). The real-time
+ * planner holds this continuous jerk (planner.h), so this tells how much of VPOp's lead comes from the samples.
+ */
+static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt,
+                             sim_run_result *r)
+{
+    r->intersample_jerk_max = r->intersample_jerk_p99 = -1;
+    if (n < 5)
+        return;
+    double *ratio = malloc(n * sizeof *ratio);
+    if (!ratio)
+        return;
+    size_t m = 0;
+    for (size_t k = 2; k + 2 < n; k++) {
+        const double v = (S[k + 1] - S[k - 1]) / (2 * dt);
+        const double a = (S[k + 1] - 2 * S[k] + S[k - 1]) / (dt * dt);
+        const double j = (S[k + 2] - 2 * S[k + 1] + 2 * S[k - 1] - S[k - 2]) / (2 * dt * dt * dt);
+        ratio[m++] = vp_jerk_ratio(gp, lim, S[k], v, a, j);
+    }
+    qsort(ratio, m, sizeof *ratio, cmp_double);
+    r->intersample_jerk_max = m ? ratio[m - 1] : 0;
+    r->intersample_jerk_p99 = m ? ratio[(size_t)(0.99 * (double)(m - 1))] : 0;
+    free(ratio);
 }
 
 /*

@@ -16,18 +16,6 @@
 #define AXPROF_CRUISE_A_REL 1e-9
 #endif
 
-/* A move's jerk counts as 0 (end of a jerk pulse, where a deferred request is taken) below this fraction of its
- * peak jerk: the rounding of cos²(pi/2) at a phase end (~1e-15 in float), far below the first cycle of any pulse
- * (sin²(pi dt / (2 T1)) >= 2.5e-6 for a rise of up to 1000 cycles). */
-#if LSM_REAL_IS_FLOAT
-#define AXPROF_JERK_ZERO_REL 1e-7f
-#else
-#define AXPROF_JERK_ZERO_REL 1e-12
-#endif
-
-/* Deferred requests (axprof.h: a stop or retarget inside a jerk pulse waits for its end). */
-enum { AXPROF_DEFER_NONE = 0, AXPROF_DEFER_STOP = 1, AXPROF_DEFER_MOVE = 2 };
-
 void lsm_axprof_init(lsm_axprof *p, lsm_real cycle_s, lsm_real pos_mm)
 {
     memset(p, 0, sizeof *p);
@@ -73,18 +61,48 @@ static lsm_status plan(lsm_axprof *p, lsm_real target, lsm_real v0, const lsm_ax
     p->mode = LSM_AXPROF_MOVE;
     p->stop_kind = 0;
     p->have_after = false;
-    p->defer = AXPROF_DEFER_NONE;
     return LSM_OK;
 }
 
-/* True while a running move is inside a jerk pulse (its jerk is not 0): a stop or retarget waits (axprof.h). */
-static bool in_jerk_pulse(const lsm_axprof *p)
+/* The jerk phase the running move is in at its present cycle (a lead for a stop, jstop.h). False when the move has
+ * ended or sits on the last cycle. */
+static bool move_lead(const lsm_axprof *p, lsm_jstop_lead *out)
 {
-    if (p->mode != LSM_AXPROF_MOVE)
-        return false;
-    const lsm_move_axis *ax = &p->mv.axis[0];
-    const lsm_real peak = lsm_max2(lsm_fabs(ax->jp_acc_mm_s3), lsm_fabs(ax->jp_dec_mm_s3));
-    return lsm_fabs(p->k.j_mm_s3) > AXPROF_JERK_ZERO_REL * peak;
+    lsm_phase ph[LSM_MOVE_PHASES];
+    lsm_move_phases(&p->mv, 0, ph);
+    uint32_t c0 = 0;
+    for (unsigned i = 0; i < LSM_MOVE_PHASES; i++) {
+        if (p->cycle < c0 + ph[i].n_cycles) {
+            out->shape = ph[i].shape;
+            out->full_s = (lsm_real)ph[i].n_cycles * p->cycle_s;
+            out->off_s = (lsm_real)(p->cycle - c0) * p->cycle_s;
+            out->jerk_mm_s3 = p->mv.axis[0].dir * ph[i].jerk_mm_s3;
+            return true;
+        }
+        c0 += ph[i].n_cycles;
+    }
+    return false;
+}
+
+/* Plans a jerk-limited stop from the axis's present state and switches to it (IDLE at once if already at rest).
+ * Inside a jerk phase of a move or of a stop, the stop continues that phase where jstop.h says so. */
+static lsm_status start_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
+{
+    lsm_jstop_lead lead;
+    bool have = false;
+    if (p->mode == LSM_AXPROF_MOVE)
+        have = move_lead(p, &lead);
+    else if (p->mode == LSM_AXPROF_STOP)
+        have = lsm_jstop_lead_now(&p->stop, &lead);
+    lsm_status st = lsm_jstop_plan_lead(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3,
+                                        have ? &lead : NULL, lim);
+    if (st != LSM_OK)
+        return st;
+    p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
+    p->stop_kind = kind;
+    if (p->mode == LSM_AXPROF_IDLE)
+        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+    return LSM_OK;
 }
 
 /* Retarget at cruise (see axprof.h): true if the new move continues from the cruise velocity. */
@@ -118,25 +136,15 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
         }
         return plan(p, target_mm, 0, lim);
     }
-    if (p->mode == LSM_AXPROF_MOVE && (p->defer != AXPROF_DEFER_NONE || in_jerk_pulse(p))) {
-        if (p->defer != AXPROF_DEFER_STOP) /* a deferred stop stays: the move follows it (as in a stop) */
-            p->defer = AXPROF_DEFER_MOVE;
-        p->have_after = true;
-        p->after_target_mm = target_mm;
-        p->after_lim = *lim;
-        return LSM_OK;
-    }
-    /* moving: continue from the cruise velocity if possible, else stop first */
+    /* moving: continue from the cruise velocity if possible, else stop first (from the present state, at once) */
     if (retarget_at_cruise(p, target_mm, lim))
         return LSM_OK;
     const lsm_axprof_limits e = lsm_axprof_effective(lim, p->cycle_s);
     const lsm_jstop_limits sl = {e.a_max_mm_s2, e.j_max_mm_s3, e.snap_max_mm_s4};
     if (p->mode == LSM_AXPROF_MOVE) {
-        lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, &sl);
+        lsm_status st = start_stop(p, &sl, 0);
         if (st != LSM_OK)
             return st;
-        p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
-        p->stop_kind = 0;
     }
     if (p->mode == LSM_AXPROF_IDLE)
         return lsm_axprof_move(p, target_mm, lim);
@@ -146,30 +154,9 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
     return LSM_OK;
 }
 
-/* Plans a jerk-limited stop from the axis's present state and switches to it (IDLE at once if already at rest). */
-static lsm_status start_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
-{
-    lsm_status st = lsm_jstop_plan(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, lim);
-    if (st != LSM_OK)
-        return st;
-    p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;
-    p->stop_kind = kind;
-    if (p->mode == LSM_AXPROF_IDLE)
-        p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
-    return LSM_OK;
-}
-
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
 {
     p->have_after = false;
-    if (p->mode == LSM_AXPROF_MOVE && (p->defer != AXPROF_DEFER_NONE || in_jerk_pulse(p))) {
-        if (p->defer != AXPROF_DEFER_STOP || kind > p->defer_kind) {
-            p->defer = AXPROF_DEFER_STOP;
-            p->defer_kind = kind;
-            p->defer_lim = *lim;
-        }
-        return LSM_OK;
-    }
     if (p->mode == LSM_AXPROF_IDLE && p->k.v_mm_s == 0 && p->k.a_mm_s2 == 0)
         return LSM_OK; /* at rest (an IDLE profile with a velocity is a CSP axis that the caller moves) */
     if (p->mode == LSM_AXPROF_STOP && p->stop_kind >= kind)
@@ -184,42 +171,7 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
 
 lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
 {
-    if (p->mode == LSM_AXPROF_MOVE && p->defer != AXPROF_DEFER_NONE)
-        p->defer = AXPROF_DEFER_NONE;                     /* a deferred halt or retarget is superseded by this stop */
-    if (p->mode == LSM_AXPROF_MOVE && in_jerk_pulse(p)) { /* start now: jstop releases the jerk in progress */
-        p->have_after = false;
-        return start_stop(p, lim, kind);
-    }
-    return lsm_axprof_stop(p, lim, kind);
-}
-
-/* A deferred request, taken at the end of the jerk pulse (the move's jerk is 0, or the move has ended). */
-static void take_deferred(lsm_axprof *p)
-{
-    const uint8_t what = p->defer;
-    p->defer = AXPROF_DEFER_NONE;
-    if (p->mode == LSM_AXPROF_MOVE)
-        p->k.j_mm_s3 = 0; /* the rounding of cos²(pi/2): the stop starts without a jerk pulse to release */
-    const bool after = p->have_after;
-    const lsm_real after_target = p->after_target_mm;
-    const lsm_axprof_limits after_lim = p->after_lim;
-    if (what == AXPROF_DEFER_STOP) {
-        const lsm_jstop_limits l = p->defer_lim;
-        (void)lsm_axprof_stop(p, &l, p->defer_kind);
-    }
-    if (!after)
-        return;
-    if (p->mode == LSM_AXPROF_STOP) { /* the move waits for the end of the stop */
-        p->have_after = true;
-        return;
-    }
-    if (p->plan_outside) { /* the owner plans it (from the present state) */
-        p->after_target_mm = after_target;
-        p->after_lim = after_lim;
-        p->after_due = true;
-        return;
-    }
-    (void)lsm_axprof_move(p, after_target, &after_lim);
+    return lsm_axprof_stop(p, lim, kind); /* every stop starts in the cycle it is requested in */
 }
 
 static void step_move(lsm_axprof *p)
@@ -239,8 +191,6 @@ static void step_move(lsm_axprof *p)
         p->k.a_mm_s2 = e.a_mm_s2;
         p->k.j_mm_s3 = e.j_mm_s3;
     }
-    if (p->defer != AXPROF_DEFER_NONE && !in_jerk_pulse(p))
-        take_deferred(p);
 }
 
 static void step_stop(lsm_axprof *p)

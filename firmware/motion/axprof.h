@@ -71,10 +71,7 @@ typedef struct lsm_axprof {
     lsm_real origin_mm; /* move start position */
     lsm_real target_mm; /* move target */
     lsm_jstop stop;
-    uint8_t defer;              /* a request waiting for the move's jerk to return to 0: AXPROF_DEFER_* (axprof.c) */
-    uint8_t defer_kind;         /* deferred stop: its kind */
-    lsm_jstop_limits defer_lim; /* deferred stop: its limits */
-    bool have_after;            /* a move waits for the end of the stop (retarget), or a deferred retarget */
+    bool have_after;            /* a move waits for the end of the stop (retarget) */
     bool plan_outside;          /* set by the owner: the waiting move is not planned inside lsm_axprof_step; at its
                                    time after_due is raised and the owner plans it (motion.h: in the background) */
     bool after_due;             /* plan_outside: the waiting move (after_target_mm, after_lim) is due now */

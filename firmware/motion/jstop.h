@@ -55,7 +55,17 @@ typedef struct lsm_jstop_limits {
     lsm_real snap_mm_s4;  /* S > 0 */
 } lsm_jstop_limits;
 
-#define LSM_JSTOP_PHASES 8 /* the jerk release, two ramps of three phases and the plateau between them */
+#define LSM_JSTOP_PHASES 8 /* the lead-in (jerk release or the rest of the present jerk phase), two ramps of three
+                              phases and the plateau between them */
+
+/* The jerk phase a coordinate is in when the stop is requested (a planned move's phase, scurve.h): its shape, its
+ * whole duration, the time already spent in it and its signed amplitude (axis frame). Lets the stop continue it. */
+typedef struct lsm_jstop_lead {
+    uint8_t shape;      /* lsm_phase_shape */
+    lsm_real full_s;    /* the phase's whole duration, > 0 */
+    lsm_real off_s;     /* time spent in it, in [0, full_s) */
+    lsm_real jerk_mm_s3; /* signed amplitude, axis frame */
+} lsm_jstop_lead;
 
 typedef struct lsm_jstop {
     lsm_jstop_limits lim;
@@ -66,8 +76,14 @@ typedef struct lsm_jstop {
     lsm_real tau_s;     /*   steps keep their length on long stops); time into it */
     lsm_real t_end_s;   /* duration of this stage */
     unsigned n_phases;
+    /* phase i: jerk(tau) = jb[i] + jerk[i] * shape_i(off[i] + tau) for tau in [0, dur[i]], shape_i the unit shape of
+     * duration full[i] (scurve.h lsm_phase_unit); off = 0, full = dur, jb = 0 but for a lead-in or a jerk
+     * transition (see above) */
     lsm_phase_shape shape[LSM_JSTOP_PHASES];
     lsm_real dur_s[LSM_JSTOP_PHASES];
+    lsm_real full_s[LSM_JSTOP_PHASES];
+    lsm_real off_s[LSM_JSTOP_PHASES];
+    lsm_real jb_mm_s3[LSM_JSTOP_PHASES];   /* constant jerk added, travel frame */
     lsm_real jerk_mm_s3[LSM_JSTOP_PHASES]; /* signed amplitude, travel frame */
     lsm_kin start[LSM_JSTOP_PHASES + 1];   /* travel-frame state at each phase start; [n_phases] = end */
     bool active;
@@ -77,6 +93,16 @@ typedef struct lsm_jstop {
  * (a limit <= 0). A state at rest (v = a = j = 0) gives an inactive stop (nothing to do). Control cycle. */
 lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
                           const lsm_jstop_limits *lim);
+
+/* As lsm_jstop_plan, from inside a known jerk phase (lead, may be NULL: then as lsm_jstop_plan): the stop continues
+ * it where the model above says so. Errors as lsm_jstop_plan, and LSM_E_ARG for a lead that is not a phase (shape,
+ * full_s <= 0, off_s outside [0, full_s), not finite). Control cycle. */
+lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                               const lsm_jstop_lead *lead, const lsm_jstop_limits *lim);
+
+/* The jerk phase of a running stop at its present time, as a lead for the stop that replaces it. False when there is
+ * none to continue (not running, or inside a jerk transition, which is no single shape). Control cycle. */
+bool lsm_jstop_lead_now(const lsm_jstop *s, lsm_jstop_lead *out);
 
 /* Advances dt_s seconds and writes the state (axis frame). Returns true while stopping; at the end it writes
  * the exact rest state (v = a = j = 0) and returns false. Control cycle. */

@@ -137,8 +137,10 @@ static void axis_stop(lsm_motion *m, unsigned k, const lsm_cia402 *ax, lsm_cia40
 }
 
 /* Posts axis k's PP plan request (lead_cycles > 0): the move starts MO_PP_PLAN_CYCLES cycles from now, planned from
- * the generator's state then (the background steps a copy there, as the tick steps its own). */
-static void pp_post(lsm_motion *m, unsigned k)
+ * the generator's state then (the background steps a copy there, as the tick steps its own). stepped: posted after
+ * this cycle's step (the generator's waiting move), so the copy is already one cycle on and the plan is taken one
+ * cycle later (before: taken a cycle early, the demand jumped by a cycle of travel). */
+static void pp_post(lsm_motion *m, unsigned k, bool stepped)
 {
     lsm_motion_axis *a = &m->ax[k];
     a->pp_wait = true;
@@ -154,7 +156,7 @@ static void pp_post(lsm_motion *m, unsigned k)
     r->steps = MO_PP_PLAN_CYCLES;
     r->axis = (uint8_t)k;
     lsm_spsc_push(&m->pipe.pp_req_idx);
-    a->pp_due = m->tk.cycle + MO_PP_PLAN_CYCLES;
+    a->pp_due = m->tk.cycle + MO_PP_PLAN_CYCLES + (stepped ? 1u : 0u);
     a->pp_from_rest = a->prof.mode == LSM_AXPROF_IDLE && a->prof.k.v_mm_s == 0 && a->prof.k.a_mm_s2 == 0;
 }
 
@@ -185,7 +187,7 @@ static void pp_take(lsm_motion *m, unsigned k, lsm_canopen *co)
         (!a->pp_have && !(a->pp_from_rest && resting) && m->tk.cycle == a->pp_due)) {
         if (!a->pp_unsent)
             a->pp_late++;
-        pp_post(m, k);
+        pp_post(m, k, false);
         return;
     }
     if (!a->pp_have || (m->tk.cycle < a->pp_due && !a->pp_from_rest))
@@ -215,7 +217,7 @@ static void pp_after_due(lsm_motion *m, unsigned k)
         return;
     a->pp_target_mm = a->prof.after_target_mm;
     a->pp_lim = a->prof.after_lim;
-    pp_post(m, k);
+    pp_post(m, k, true);
 }
 
 static void axis_pp(lsm_motion *m, unsigned k, lsm_canopen *co, lsm_cia402 *ax)
@@ -229,7 +231,7 @@ static void axis_pp(lsm_motion *m, unsigned k, lsm_canopen *co, lsm_cia402 *ax)
     if (m->lead_cycles > 0u) { /* the background plans it (mpipe.h) */
         a->pp_target_mm = (lsm_real)sp.target / cpm;
         a->pp_lim = pl;
-        pp_post(m, k);
+        pp_post(m, k, false);
         return;
     }
     if (lsm_axprof_move(&a->prof, (lsm_real)sp.target / cpm, &pl) == LSM_OK) {

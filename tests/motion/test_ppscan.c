@@ -161,8 +161,6 @@ static void run_one(const lsm_axprof_limits *lim, double dist, unsigned at, req_
     }
     unsigned n = 0, waited = 0;
     while (!lsm_axprof_at_rest(&p) && n < MAX_CYCLES) {
-        if (p.defer != 0)
-            waited++;
         step_checked(&c, &p);
         n++;
     }

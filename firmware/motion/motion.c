@@ -65,12 +65,16 @@ static lsm_jstop_limits stop_limits(const lsm_motion *m, unsigned k, const lsm_c
         s.decel_mm_s2 = l->a_max_mm_s2;
         s.jerk_mm_s3 = l->j_max_mm_s3;
         s.snap_mm_s4 = l->snap_max_mm_s4;
-        return s;
+    } else {
+        const lsm_real d =
+            kind == LSM_CIA402_STOP_QUICK ? (lsm_real)ax->quick_stop_decel : (lsm_real)ax->profile_decel;
+        s.decel_mm_s2 = lsm_min2(d / cpm, l->a_max_mm_s2);
+        s.jerk_mm_s3 = lsm_min2((lsm_real)ax->profile_jerk / cpm, l->j_max_mm_s3);
+        s.snap_mm_s4 = lsm_min2((lsm_real)ax->profile_snap / cpm, l->snap_max_mm_s4);
     }
-    const lsm_real d = kind == LSM_CIA402_STOP_QUICK ? (lsm_real)ax->quick_stop_decel : (lsm_real)ax->profile_decel;
-    s.decel_mm_s2 = lsm_min2(d / cpm, l->a_max_mm_s2);
-    s.jerk_mm_s3 = lsm_min2((lsm_real)ax->profile_jerk / cpm, l->j_max_mm_s3);
-    s.snap_mm_s4 = lsm_min2((lsm_real)ax->profile_snap / cpm, l->snap_max_mm_s4);
+    /* profile type 0 (the linear ramp: a move's jerk steps within one cycle, axprof.h): every stop's too, the
+     * E-stop's included; a sin² jerk rise at the machine's snap limit would brake later than the move it stops
+     * and take the velocity past the profile's (test_pp_props: 20.13 against 20 mm/s) */
     if (ax->profile_type == 0)
         s.snap_mm_s4 = MO_LINEAR_SNAP_MARGIN * (lsm_real)LSM_PI * s.jerk_mm_s3 / (2 * m->cycle_s);
     return s;

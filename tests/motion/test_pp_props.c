@@ -59,6 +59,7 @@ typedef struct app {
 } app;
 static app g_app;
 static pp_checker g_chk;
+static unsigned long g_cycles, g_ends[3], g_requests; /* for the report */
 
 static void set(uint16_t idx, uint8_t sub, int64_t v)
 {
@@ -78,6 +79,7 @@ static void cycle(void)
     while (lsm_motion_background(&g_app.mo)) {
     }
     pp_check_kin2(&g_chk, lsm_motion_demand(&g_app.mo, 0), g_app.mo.ax[0].prof.mode == LSM_AXPROF_MOVE);
+    g_cycles++;
 }
 
 typedef struct limits {
@@ -217,9 +219,11 @@ static void run_case(uint64_t *r, unsigned long ci)
             halted = !halted;
             set(0x6040, 0, halted ? 0x10F : 0x0F);
         }
+        g_requests++;
         cycles((unsigned)(test_urand(r) * GAP_MAX));
     }
     const double end = test_urand(r);
+    g_ends[end < 0.25 ? 0 : end < 0.5 ? 1 : 2]++;
     if (end < 0.25 && !g_chk.bad) { /* quick stop */
         pp_check_limits(&g_chk, l.v, fmin(fmax(l.dec, l.dq), l.am), fmin(l.j, l.jm), g_chk.S);
         set(0x6040, 0, 0x0B);
@@ -255,6 +259,8 @@ static void test_props(void **state)
         for (int k = 0; k < 10; k++)
             worst[k] = fmax(worst[k], g_chk.worst[k]);
     }
+    printf("%llu cases, %lu requests, %lu cycles; ends: %lu quick stops, %lu E-stops, %lu at the target\n", g_count,
+           g_requests, g_cycles, g_ends[0], g_ends[1], g_ends[2]);
     printf("%llu cases; worst/allowed v %.9f a %.9f j %.9f snap %.9f dv %.9f da %.9f D1 %.9f D2 %.9f D3 %.9f D4 %.9f\n",
            g_count, worst[0], worst[1], worst[2], worst[3], worst[4], worst[5], worst[6], worst[7], worst[8],
            worst[9]);
@@ -263,7 +269,7 @@ static void test_props(void **state)
 int main(int argc, char **argv)
 {
     g_seed = test_arg_u(argc, argv, 1, 1u);
-    g_count = test_arg_u(argc, argv, 2, 150u);
+    g_count = test_arg_u(argc, argv, 2, 600u);
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_props)};
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

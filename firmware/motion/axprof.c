@@ -94,8 +94,8 @@ static lsm_status start_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t
         have = move_lead(p, &lead);
     else if (p->mode == LSM_AXPROF_STOP)
         have = lsm_jstop_lead_now(&p->stop, &lead);
-    lsm_status st = lsm_jstop_plan_lead(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3,
-                                        have ? &lead : NULL, lim);
+    lsm_status st =
+        lsm_jstop_plan_lead(&p->stop, p->k.s_mm, p->k.v_mm_s, p->k.a_mm_s2, p->k.j_mm_s3, have ? &lead : NULL, lim);
     if (st != LSM_OK)
         return st;
     p->mode = p->stop.active ? LSM_AXPROF_STOP : LSM_AXPROF_IDLE;

@@ -19,15 +19,15 @@
  * otherwise the coordinate stops (jerk-limited, with the new set-point's deceleration) and then starts the new
  * move from rest.
  *
- * A stop or a retarget requested while the running move's jerk is not 0 (inside a jerk pulse of one of its
- * four ramps) takes effect at the cycle where the move's jerk is back to 0 (the end of that ramp's jerk pulse:
- * at most one acceleration ramp, A / J + pi J / (2 S) s, later; profile type 0: A / J + one cycle): until then the
- * planned move runs on. Starting the stop from inside the pulse instead would first have to release the jerk
- * in progress (jstop.h), which keeps the acceleration up for pi |j| / (2 S) longer than the plan (or, in a
- * ramp-down, undoes it): the velocity then passes the profile velocity (up to 12 % on the HIL profile) and the
- * acceleration its limit. From a state with j = 0 the stop's ramp down of a is no slower than the plan's (the
- * stop's J and S are at least the plan's effective ones), so it never gains more velocity than the plan would:
- * |v| <= V, |a| <= max(A, D) throughout (tests/motion/test_ppscan: every request cycle of a move).
+ * A stop or a retarget starts in the cycle it is requested in, from any state (v, a, j; also inside a jerk pulse
+ * with the jerk changing): the stop (jstop.h) continues the move's present jerk phase where that keeps the move's
+ * own bounds (the rest of a cos² fall of the jerk; the rest of a sin² rise of a braking jerk), goes on from a
+ * braking jerk, and releases a jerk that raises |a| with a cos² fall at the snap limit (no faster release exists
+ * within S, and it gains no more acceleration than the move's own fall would). The jerk stays continuous and
+ * |snap| <= S (type 1); |v| <= V, |a| <= max(A, D), |j| <= max(J, |j0|) (tests/motion/test_ppscan: every request
+ * cycle of a move; test_pp_midramp; test_pp_props: random requests at random cycles). (Before, a request inside a
+ * jerk pulse waited for the pulse's end, up to one acceleration ramp, and an urgent stop released the jerk at once:
+ * 100.54 mm/s against 100 on the HIL profile.)
  *
  * Contexts: lsm_axprof_step runs in the control cycle. lsm_axprof_move and lsm_axprof_stop plan (a move plan
  * is ~100 k instructions on the M4, a stop a bisection): they are called where the set-point or the stop
@@ -71,10 +71,10 @@ typedef struct lsm_axprof {
     lsm_real origin_mm; /* move start position */
     lsm_real target_mm; /* move target */
     lsm_jstop stop;
-    bool have_after;            /* a move waits for the end of the stop (retarget) */
-    bool plan_outside;          /* set by the owner: the waiting move is not planned inside lsm_axprof_step; at its
+    bool have_after;   /* a move waits for the end of the stop (retarget) */
+    bool plan_outside; /* set by the owner: the waiting move is not planned inside lsm_axprof_step; at its
                                    time after_due is raised and the owner plans it (motion.h: in the background) */
-    bool after_due;             /* plan_outside: the waiting move (after_target_mm, after_lim) is due now */
+    bool after_due;    /* plan_outside: the waiting move (after_target_mm, after_lim) is due now */
     lsm_real after_target_mm;
     lsm_axprof_limits after_lim;
 } lsm_axprof;
@@ -92,11 +92,8 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
  * lsm_jstop_plan error (then the state is held: it cannot happen with validated limits). Control cycle. */
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
 
-/* As lsm_axprof_stop, but never deferred: inside a jerk pulse of a move the stop starts in this cycle and first
- * releases the jerk in progress (jstop.h). For quick stops and emergency stops (E-stop, fault reaction), which must
- * begin in the cycle they are seen in: the price is the bounded overshoot described above (|a| up to
- * |a0| + pi j0² / (4 S), the velocity past the profile velocity by the velocity that adds), instead of up to one
- * acceleration ramp of delay (66 ms on the HIL profile). A deferred halt or retarget is dropped. Control cycle. */
+/* The same as lsm_axprof_stop (kept for the callers of quick stops, E-stops and fault reactions, which must begin in
+ * the cycle they are seen in: every stop now does). Control cycle. */
 lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
 
 /* One cycle. Returns true if the coordinate moved during it. Control cycle. */

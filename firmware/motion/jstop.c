@@ -58,7 +58,7 @@ typedef struct jramp {
 static void ramp_from(lsm_real j0, lsm_real da, const lsm_jstop_limits *l, jramp *r)
 {
     const lsm_real S = l->snap_mm_s4;
-    const lsm_real q = 4 * S / JSTOP_PI;             /* da of a max-snap sin² segment j_s -> j_e: (j_e² - j_s²) / q */
+    const lsm_real q = 4 * S / JSTOP_PI; /* da of a max-snap sin² segment j_s -> j_e: (j_e² - j_s²) / q */
     const lsm_real jl = lsm_max2(l->jerk_mm_s3, -j0); /* a jerk beyond J that the stop starts with is not raised */
     lsm_real x = (j0 * j0 - q * da) / 2;
     lsm_real jp = -lsm_sqrt(x > 0 ? x : 0), t2 = 0;

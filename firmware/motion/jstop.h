@@ -2,11 +2,18 @@
  * jstop.h: a jerk- and snap-limited stop of one coordinate from any kinematic state (lsm_jstop_*).
  *
  * Model. From the state (v0, a0, j0) at the moment the stop is requested, the coordinate is brought to
- * v = a = j = 0 with the acceleration shaped like the sin² S-curve of scurve.h (Kombarov eq 6). A jerk j0 != 0
- * (a stop requested inside a jerk phase of a move) is first released to 0 with a cos² fall of j0 within the snap
- * limit (duration pi |j0| / (2 S), eq 22: no jump in jerk, so the snap stays bounded); the stop is then planned
- * from the state at its end (v0', a0'), with j = 0, in three segments
- *
+ * v = a = j = 0 with the acceleration shaped like the sin² S-curve of scurve.h (Kombarov eq 6). The jerk stays
+ * continuous and |snap| <= S (eq 22). A stop requested inside a jerk phase (travel frame, v0 >= 0) first has a
+ * lead-in:
+ *   - inside a cos² fall of the jerk (lsm_jstop_plan_lead with the phase): the rest of that fall, as planned;
+ *   - inside a sin² rise of a braking jerk (j0 < 0, amplitude within J): the rest of that rise, as planned;
+ *   - otherwise a jerk j0 > 0 (it raises a) is released with a cos² fall within the snap limit (duration
+ *     pi |j0| / (2 S)); a braking jerk j0 < 0 is kept.
+ * The rest of the move's own phase never brakes later nor accelerates more than the move would. A stop that is
+ * braking already (j1 < 0 after the lead-in) and needs to brake harder than the plain release of j1 does takes its
+ * first ramp from j1: a sin² transition j1 -> jp (jp <= j1, duration pi (j1 - jp) / (2 S), a gain of
+ * (j1² - jp²) pi / (4 S) in -a), a plateau at jp and a cos² fall (brakes_on, ramp_from in jstop.c); otherwise j1
+ * is released first. The stop is then planned from the state at the end of that (v0', a0'), in three segments
  *      a |                                      A: ramp a0 -> a1   (jerk pulse: sin² rise, plateau, cos² fall)
  *     a0 |\                                     B: constant a1 for tB (only when a1 = -D is reached)
  *        | \                     ___            C: ramp a1 -> 0
@@ -27,7 +34,8 @@
  * and a second stop (in the other direction) follows at once. The durations are real numbers (not whole
  * cycles); the state is evaluated in closed form (scurve.h's phase shapes, eq 15) at every cycle and the last
  * cycle lands on the exact end. No limit is ever exceeded: |a| <= max(|a0'|, D), |j| <= max(|j0|, J),
- * |snap| <= S, with |a0'| <= |a0| + pi j0² / (4 S) (the jerk release adds j0 pi |j0| / (4 S) to a).
+ * |snap| <= S, with |a0'| <= |a0| + pi j0² / (4 S) (a jerk release adds j0 pi |j0| / (4 S) to a; the rest of a
+ * move's phase stays within the move's own a).
  * Time: the double build counts the time since the start of the stop; the float build counts it from the start
  * of the present phase, since a float clock of tens of seconds would make the steps uneven by a percent (the
  * ulp of 44 s is 4 µs) and the sampled jerk would step by more than S dt.
@@ -55,15 +63,16 @@ typedef struct lsm_jstop_limits {
     lsm_real snap_mm_s4;  /* S > 0 */
 } lsm_jstop_limits;
 
-#define LSM_JSTOP_PHASES 8 /* the lead-in (jerk release or the rest of the present jerk phase), two ramps of three
+#define LSM_JSTOP_PHASES \
+    8 /* the lead-in (jerk release or the rest of the present jerk phase), two ramps of three
                               phases and the plateau between them */
 
 /* The jerk phase a coordinate is in when the stop is requested (a planned move's phase, scurve.h): its shape, its
  * whole duration, the time already spent in it and its signed amplitude (axis frame). Lets the stop continue it. */
 typedef struct lsm_jstop_lead {
-    uint8_t shape;      /* lsm_phase_shape */
-    lsm_real full_s;    /* the phase's whole duration, > 0 */
-    lsm_real off_s;     /* time spent in it, in [0, full_s) */
+    uint8_t shape;       /* lsm_phase_shape */
+    lsm_real full_s;     /* the phase's whole duration, > 0 */
+    lsm_real off_s;      /* time spent in it, in [0, full_s) */
     lsm_real jerk_mm_s3; /* signed amplitude, axis frame */
 } lsm_jstop_lead;
 

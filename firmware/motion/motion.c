@@ -66,8 +66,7 @@ static lsm_jstop_limits stop_limits(const lsm_motion *m, unsigned k, const lsm_c
         s.jerk_mm_s3 = l->j_max_mm_s3;
         s.snap_mm_s4 = l->snap_max_mm_s4;
     } else {
-        const lsm_real d =
-            kind == LSM_CIA402_STOP_QUICK ? (lsm_real)ax->quick_stop_decel : (lsm_real)ax->profile_decel;
+        const lsm_real d = kind == LSM_CIA402_STOP_QUICK ? (lsm_real)ax->quick_stop_decel : (lsm_real)ax->profile_decel;
         s.decel_mm_s2 = lsm_min2(d / cpm, l->a_max_mm_s2);
         s.jerk_mm_s3 = lsm_min2((lsm_real)ax->profile_jerk / cpm, l->j_max_mm_s3);
         s.snap_mm_s4 = lsm_min2((lsm_real)ax->profile_snap / cpm, l->snap_max_mm_s4);

@@ -53,7 +53,7 @@ typedef struct pp_checker {
     unsigned np;           /* positions held (<= 5) */
     lsm_kin prev;
     double pmax;
-    unsigned long n; /* cycles checked */
+    unsigned long n;  /* cycles checked */
     double worst[10]; /* worst ratio to the allowed value: v a j snap dv da, then D1 .. D4 */
     bool bad;
     char msg[320];
@@ -85,9 +85,9 @@ static inline void pp_check_note(pp_checker *c, int slot, double x, double allow
         c->worst[slot] = r;
     if (r > 1 && !c->bad) {
         c->bad = true;
-        snprintf(c->msg, sizeof c->msg, "cycle %lu: %s %.9g exceeds %.9g (ratio %.9g); state s %.12g v %.9g a %.9g j %.9g",
-                 c->n, what, x, allowed, r, c->p[0], (double)c->prev.v_mm_s, (double)c->prev.a_mm_s2,
-                 (double)c->prev.j_mm_s3);
+        snprintf(c->msg, sizeof c->msg,
+                 "cycle %lu: %s %.9g exceeds %.9g (ratio %.9g); state s %.12g v %.9g a %.9g j %.9g", c->n, what, x,
+                 allowed, r, c->p[0], (double)c->prev.v_mm_s, (double)c->prev.a_mm_s2, (double)c->prev.j_mm_s3);
     }
 }
 

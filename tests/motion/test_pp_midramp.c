@@ -39,9 +39,9 @@
 
 #define NID 3u
 #define LA_BLOCKS 32u
-#define LEAD_NODE 24u   /* the controller image's and lissom-node's lead (ctl_motion_cia402.h) */
+#define LEAD_NODE 24u    /* the controller image's and lissom-node's lead (ctl_motion_cia402.h) */
 #define LATENCY_MAX 100u /* request cycles after the demand passed the point */
-#define RUN_MAX 20000u  /* guard: cycles to rest */
+#define RUN_MAX 20000u   /* guard: cycles to rest */
 
 /* The machine of lissom-node's built-in default: 250 mm/s, 3000 mm/s², 60000 mm/s³, 1.18e7 mm/s⁴. */
 static const lsm_axis_limits k_lim = {250, 3000, 60000, 1.18e7};

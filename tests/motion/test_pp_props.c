@@ -83,9 +83,9 @@ static void cycle(void)
 }
 
 typedef struct limits {
-    double vm, am, jm, sm;     /* machine */
-    double v, acc, dec, j, s;  /* profile */
-    double dq;                 /* quick stop deceleration */
+    double vm, am, jm, sm;    /* machine */
+    double v, acc, dec, j, s; /* profile */
+    double dq;                /* quick stop deceleration */
     int type;
 } limits;
 
@@ -262,8 +262,7 @@ static void test_props(void **state)
     printf("%llu cases, %lu requests, %lu cycles; ends: %lu quick stops, %lu E-stops, %lu at the target\n", g_count,
            g_requests, g_cycles, g_ends[0], g_ends[1], g_ends[2]);
     printf("%llu cases; worst/allowed v %.9f a %.9f j %.9f snap %.9f dv %.9f da %.9f D1 %.9f D2 %.9f D3 %.9f D4 %.9f\n",
-           g_count, worst[0], worst[1], worst[2], worst[3], worst[4], worst[5], worst[6], worst[7], worst[8],
-           worst[9]);
+           g_count, worst[0], worst[1], worst[2], worst[3], worst[4], worst[5], worst[6], worst[7], worst[8], worst[9]);
 }
 
 int main(int argc, char **argv)

@@ -16,6 +16,10 @@
 #define AXPROF_CRUISE_A_REL 1e-9
 #endif
 
+/* A retarget's settle needs the target this many cycles of cruise beyond the stop distance from its cruise: the
+ * owner's plan of the move from the cruise may start that much later (motion.c: 9 cycles), with a margin. */
+#define AXPROF_SETTLE_LEAD_CYCLES 16u
+
 void lsm_axprof_init(lsm_axprof *p, lsm_real cycle_s, lsm_real pos_mm)
 {
     memset(p, 0, sizeof *p);
@@ -109,8 +113,9 @@ static lsm_status start_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t
 static bool retarget_at_cruise(lsm_axprof *p, lsm_real target, const lsm_axprof_limits *lim)
 {
     const lsm_real d = target - p->k.s_mm;
-    if (!(p->mode == LSM_AXPROF_MOVE && lsm_fabs(p->k.a_mm_s2) <= AXPROF_CRUISE_A_REL * lim->a_max_mm_s2 &&
-          d * p->k.v_mm_s > 0 && lsm_fabs(p->k.v_mm_s) <= lim->v_max_mm_s))
+    if (!((p->mode == LSM_AXPROF_MOVE || p->mode == LSM_AXPROF_CRUISE) &&
+          lsm_fabs(p->k.a_mm_s2) <= AXPROF_CRUISE_A_REL * lim->a_max_mm_s2 && d * p->k.v_mm_s > 0 &&
+          lsm_fabs(p->k.v_mm_s) <= lim->v_max_mm_s))
         return false;
     const lsm_move saved = p->mv;
     const lsm_stepgen saved_gen = p->gen;
@@ -127,6 +132,63 @@ static bool retarget_at_cruise(lsm_axprof *p, lsm_real target, const lsm_axprof_
     return false;
 }
 
+/* Cruises at v_mm_s from the present position (the end of a retarget's settle: axprof.h). */
+static void start_cruise(lsm_axprof *p, lsm_real v_mm_s)
+{
+    p->mode = LSM_AXPROF_CRUISE;
+    p->stop_kind = 0;
+    p->cruise_origin_mm = p->k.s_mm;
+    p->cruise_v_mm_s = v_mm_s;
+    p->cruise_cycles = 0;
+    p->k.v_mm_s = v_mm_s;
+    p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+}
+
+/* Distance (>= 0) of the stop from (v, 0, 0) with these limits. */
+static lsm_real stop_distance(lsm_real v_mm_s, const lsm_jstop_limits *sl)
+{
+    lsm_jstop st;
+    if (lsm_jstop_plan(&st, 0, lsm_fabs(v_mm_s), 0, 0, sl) != LSM_OK || !st.active)
+        return 0;
+    lsm_kin e;
+    lsm_jstop_eval(&st, st.t_end_s, &e);
+    return lsm_fabs(e.s_mm);
+}
+
+/* A retarget of a running move to a target ahead (axprof.h): the velocity settles (a = j = 0) from the present
+ * state, continuing its jerk phase (lsm_jstop_plan_settle), and the new move is planned from that cruise, if the
+ * cruise is within the new velocity limit and the target far enough past the settle's end to stop there from it
+ * (with AXPROF_SETTLE_LEAD_CYCLES of cruise). Two stop plans: bounded. */
+static bool settle(lsm_axprof *p, lsm_real target, const lsm_axprof_limits *lim, const lsm_jstop_limits *sl)
+{
+    const lsm_real v = p->k.v_mm_s;
+    if (p->mode != LSM_AXPROF_MOVE || !((target - p->k.s_mm) * v > 0))
+        return false;
+    lsm_jstop_lead lead;
+    const bool have = move_lead(p, &lead);
+    lsm_jstop st;
+    if (lsm_jstop_plan_settle(&st, p->k.s_mm, v, p->k.a_mm_s2, p->k.j_mm_s3, have ? &lead : NULL, sl) != LSM_OK)
+        return false;
+    const lsm_real sg = v > 0 ? 1 : -1, ve = st.v_end_mm_s;
+    lsm_real pe = p->k.s_mm;
+    if (st.active) {
+        lsm_kin e;
+        lsm_jstop_eval(&st, st.t_end_s, &e);
+        pe = e.s_mm;
+    }
+    const lsm_real need = stop_distance(ve, sl) + lsm_fabs(ve) * p->cycle_s * (lsm_real)AXPROF_SETTLE_LEAD_CYCLES;
+    if (!(sg * ve > 0 && lsm_fabs(ve) <= lim->v_max_mm_s && sg * (target - pe) >= need))
+        return false;
+    if (!st.active) {
+        start_cruise(p, ve);
+        return true;
+    }
+    p->stop = st;
+    p->mode = LSM_AXPROF_STOP;
+    p->stop_kind = 0;
+    return true;
+}
+
 lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_limits *lim)
 {
     if (p->mode == LSM_AXPROF_IDLE) {
@@ -141,13 +203,22 @@ lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_l
         return LSM_OK;
     const lsm_axprof_limits e = lsm_axprof_effective(lim, p->cycle_s);
     const lsm_jstop_limits sl = {e.a_max_mm_s2, e.j_max_mm_s3, e.snap_max_mm_s4};
-    if (p->mode == LSM_AXPROF_MOVE) {
+    if (p->mode == LSM_AXPROF_CRUISE || (p->mode == LSM_AXPROF_MOVE && !settle(p, target_mm, lim, &sl))) {
         lsm_status st = start_stop(p, &sl, 0);
         if (st != LSM_OK)
             return st;
     }
     if (p->mode == LSM_AXPROF_IDLE)
         return lsm_axprof_move(p, target_mm, lim);
+    if (p->mode == LSM_AXPROF_CRUISE) { /* settled at once: the move from the cruise */
+        p->after_target_mm = target_mm;
+        p->after_lim = *lim;
+        if (p->plan_outside) { /* the owner plans it */
+            p->after_due = true;
+            return LSM_OK;
+        }
+        return retarget_at_cruise(p, target_mm, lim) ? LSM_OK : lsm_axprof_move(p, target_mm, lim);
+    }
     p->have_after = true;
     p->after_target_mm = target_mm;
     p->after_lim = *lim;
@@ -159,10 +230,11 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
     p->have_after = false;
     if (p->mode == LSM_AXPROF_IDLE && p->k.v_mm_s == 0 && p->k.a_mm_s2 == 0)
         return LSM_OK; /* at rest (an IDLE profile with a velocity is a CSP axis that the caller moves) */
-    if (p->mode == LSM_AXPROF_STOP && p->stop_kind >= kind)
+    const bool stopping = p->mode == LSM_AXPROF_STOP && !p->stop.settle; /* a retarget's settle is no stop */
+    if (stopping && p->stop_kind >= kind)
         return LSM_OK;
-    if (p->mode == LSM_AXPROF_STOP && p->stop.lim.decel_mm_s2 >= lim->decel_mm_s2 &&
-        p->stop.lim.jerk_mm_s3 >= lim->jerk_mm_s3 && p->stop.lim.snap_mm_s4 >= lim->snap_mm_s4) {
+    if (stopping && p->stop.lim.decel_mm_s2 >= lim->decel_mm_s2 && p->stop.lim.jerk_mm_s3 >= lim->jerk_mm_s3 &&
+        p->stop.lim.snap_mm_s4 >= lim->snap_mm_s4) {
         p->stop_kind = kind; /* the running stop is already at least as fast */
         return LSM_OK;
     }
@@ -200,7 +272,10 @@ static void step_stop(lsm_axprof *p)
     p->k = e;
     if (running)
         return;
-    p->mode = LSM_AXPROF_IDLE;
+    if (p->stop.settle)
+        start_cruise(p, e.v_mm_s); /* a retarget's settle ended: the move from the cruise follows */
+    else
+        p->mode = LSM_AXPROF_IDLE;
     p->stop_kind = 0;
     if (p->have_after && p->plan_outside) {
         p->have_after = false;
@@ -214,11 +289,21 @@ static void step_stop(lsm_axprof *p)
     }
 }
 
+/* One cycle of a cruise (exact: origin + v n dt, no accumulated rounding). */
+static void step_cruise(lsm_axprof *p)
+{
+    p->cruise_cycles++;
+    p->k.s_mm = p->cruise_origin_mm + p->cruise_v_mm_s * ((lsm_real)p->cruise_cycles * p->cycle_s);
+    p->k.v_mm_s = p->cruise_v_mm_s;
+    p->k.a_mm_s2 = p->k.j_mm_s3 = 0;
+}
+
 bool lsm_axprof_step(lsm_axprof *p)
 {
     switch (p->mode) {
     case LSM_AXPROF_MOVE: step_move(p); return true;
     case LSM_AXPROF_STOP: step_stop(p); return true;
+    case LSM_AXPROF_CRUISE: step_cruise(p); return true;
     default: p->k.v_mm_s = p->k.a_mm_s2 = p->k.j_mm_s3 = 0; return false;
     }
 }

@@ -248,8 +248,9 @@ static lsm_real lead_in(lsm_jstop *s, const lsm_jstop_lead *lead, lsm_kin *k0)
     return 0;
 }
 
-lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
-                               const lsm_jstop_lead *lead, const lsm_jstop_limits *lim)
+/* Validates the request and resets the plan (inactive, at p_mm). */
+static lsm_status begin(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                        const lsm_jstop_lead *lead, const lsm_jstop_limits *lim)
 {
     if (s == NULL || lim == NULL)
         return LSM_E_NULL;
@@ -268,13 +269,68 @@ lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm
     s->lim = *lim;
     s->origin_mm = p_mm;
     s->dir = 1;
+    return LSM_OK;
+}
+
+/* The planning frame (dir) and the start state in it. */
+static void set_frame(lsm_jstop *s, lsm_real dir, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3)
+{
+    s->dir = dir;
+    s->start[0].s_mm = 0;
+    s->start[0].v_mm_s = dir * v_mm_s;
+    s->start[0].a_mm_s2 = dir * a_mm_s2;
+    s->start[0].j_mm_s3 = dir * j_mm_s3;
+}
+
+/* The phase start states and the duration of the plan; it is active. */
+static void finish(lsm_jstop *s)
+{
+    s->t_end_s = 0;
+    for (unsigned i = 0; i < s->n_phases; i++) {
+        advance(s, i, s->dur_s[i], &s->start[i + 1]);
+        s->t_end_s += s->dur_s[i];
+    }
+    /* the end has a = j = 0 by construction (up to rounding) */
+    s->start[s->n_phases].a_mm_s2 = 0;
+    s->start[s->n_phases].j_mm_s3 = 0;
+    s->active = true;
+}
+
+/* Releases a braking jerk j1 < 0 (travel frame) with a cos² fall within S; k0 becomes the state at its end. */
+static void release(lsm_jstop *s, lsm_real j1, lsm_kin *k0)
+{
+    const unsigned i = s->n_phases;
+    add_phase(s, LSM_PHASE_FALL, JSTOP_PI * -j1 / (2 * s->lim.snap_mm_s4), j1);
+    if (s->n_phases > i) {
+        s->start[i] = *k0;
+        advance(s, i, s->dur_s[i], k0);
+    }
+}
+
+/* The shortest ramp of a from k0's (> 0, travel frame, j = 0) to 0; k0 becomes the state at its end. A single ramp
+ * from a > 0 down to the stop's deceleration would have a higher peak jerk and so a slower sin² rise (its snap grows
+ * as S² t / J_P): the velocity would rise past the velocity the move itself reaches. */
+static void ramp_to_zero(lsm_jstop *s, lsm_kin *k0)
+{
+    const unsigned first = s->n_phases;
+    add_ramp(s, k0->a_mm_s2, 0);
+    for (unsigned i = first; i < s->n_phases; i++) {
+        s->start[i] = *k0;
+        advance(s, i, s->dur_s[i], k0);
+    }
+    k0->a_mm_s2 = 0;
+    k0->j_mm_s3 = 0;
+}
+
+lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                               const lsm_jstop_lead *lead, const lsm_jstop_limits *lim)
+{
+    lsm_status st = begin(s, p_mm, v_mm_s, a_mm_s2, j_mm_s3, lead, lim);
+    if (st != LSM_OK)
+        return st;
     if (v_mm_s == 0 && a_mm_s2 == 0 && j_mm_s3 == 0)
         return LSM_OK; /* at rest: nothing to do */
-    s->dir = direction(v_mm_s, a_mm_s2, j_mm_s3);
-    s->start[0].s_mm = 0;
-    s->start[0].v_mm_s = s->dir * v_mm_s;
-    s->start[0].a_mm_s2 = s->dir * a_mm_s2;
-    s->start[0].j_mm_s3 = s->dir * j_mm_s3;
+    set_frame(s, direction(v_mm_s, a_mm_s2, j_mm_s3), v_mm_s, a_mm_s2, j_mm_s3);
     lsm_kin k0 = s->start[0];
     const lsm_real j1 = lead_in(s, lead, &k0);
     lsm_real tb, a1, hi = 0;
@@ -282,28 +338,41 @@ lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm
         a1 = intermediate(k0.v_mm_s, k0.a_mm_s2, j1, hi, lim, &tb);
         add_ramp_from(s, k0.a_mm_s2, j1, a1);
     } else {
-        if (j1 < 0) { /* release the braking jerk first: the stop brakes less than it does */
-            const unsigned i = s->n_phases;
-            add_phase(s, LSM_PHASE_FALL, JSTOP_PI * -j1 / (2 * lim->snap_mm_s4), j1);
-            if (s->n_phases > i) {
-                s->start[i] = k0;
-                advance(s, i, s->dur_s[i], &k0);
-            }
-        }
+        if (j1 < 0) /* release the braking jerk first: the stop brakes less than it does */
+            release(s, j1, &k0);
+        if (k0.a_mm_s2 > 0) /* still accelerating: first a to 0 by the shortest ramp (jstop.h) */
+            ramp_to_zero(s, &k0);
         a1 = intermediate(k0.v_mm_s, k0.a_mm_s2, 0, 0, lim, &tb);
         add_ramp(s, k0.a_mm_s2, a1);
     }
     add_phase(s, LSM_PHASE_CONST, tb, 0);
     add_ramp(s, a1, 0);
-    s->t_end_s = 0;
-    for (unsigned i = 0; i < s->n_phases; i++) {
-        advance(s, i, s->dur_s[i], &s->start[i + 1]);
-        s->t_end_s += s->dur_s[i];
+    finish(s);
+    return LSM_OK;
+}
+
+lsm_status lsm_jstop_plan_settle(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                                 const lsm_jstop_lead *lead, const lsm_jstop_limits *lim)
+{
+    lsm_status st = begin(s, p_mm, v_mm_s, a_mm_s2, j_mm_s3, lead, lim);
+    if (st != LSM_OK)
+        return st;
+    s->settle = true;
+    s->v_end_mm_s = v_mm_s;
+    if (a_mm_s2 == 0 && j_mm_s3 == 0)
+        return LSM_OK; /* at a constant velocity already: nothing to do */
+    set_frame(s, direction(a_mm_s2, j_mm_s3, 0), v_mm_s, a_mm_s2, j_mm_s3); /* a >= 0 in this frame */
+    lsm_kin k0 = s->start[0];
+    const lsm_real j1 = lead_in(s, lead, &k0);
+    if (j1 < 0 && k0.a_mm_s2 - JSTOP_PI * j1 * j1 / (4 * lim->snap_mm_s4) >= 0) {
+        add_ramp_from(s, k0.a_mm_s2, j1, 0); /* a falls to 0 from the braking jerk j1 on */
+    } else {
+        if (j1 < 0)
+            release(s, j1, &k0);
+        add_ramp(s, k0.a_mm_s2, 0);
     }
-    /* the end is rest by construction (up to rounding); a negative end velocity is the overshoot stage */
-    s->start[s->n_phases].a_mm_s2 = 0;
-    s->start[s->n_phases].j_mm_s3 = 0;
-    s->active = true;
+    finish(s);
+    s->v_end_mm_s = s->dir * s->start[s->n_phases].v_mm_s;
     return LSM_OK;
 }
 
@@ -343,7 +412,8 @@ static void rest_at(lsm_jstop *s, lsm_real p_mm, lsm_kin *out)
     s->active = false;
     s->origin_mm = p_mm;
     out->s_mm = p_mm;
-    out->v_mm_s = out->a_mm_s2 = out->j_mm_s3 = 0;
+    out->v_mm_s = s->settle ? s->v_end_mm_s : 0;
+    out->a_mm_s2 = out->j_mm_s3 = 0;
 }
 
 /* Advances the clock by dt_s. True while the stage runs; else *past_s is the time beyond its end. */
@@ -391,13 +461,14 @@ bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out)
     const lsm_real p_end = s->origin_mm + s->dir * e.s_mm;
     const lsm_real v_end = s->dir * e.v_mm_s;
     const lsm_real scale = lsm_fabs(s->start[0].v_mm_s) + lsm_fabs(s->start[0].a_mm_s2) * s->t_end_s + (lsm_real)1e-12;
-    if (lsm_fabs(v_end) > JSTOP_OVERSHOOT_REL * scale) {
+    if (!s->settle && lsm_fabs(v_end) > JSTOP_OVERSHOOT_REL * scale) {
         /* overshoot stage done: stop again from (p_end, v_end, 0) with the rest of this cycle */
         const lsm_jstop_limits lim = s->lim;
         if (lsm_jstop_plan(s, p_end, v_end, 0, 0, &lim) == LSM_OK && s->active)
             return lsm_jstop_step(s, past, out);
     }
-    rest_at(s, p_end, out);
+    /* a settle goes on at its end velocity for the part of the cycle past its end (a stop is at rest there) */
+    rest_at(s, s->settle ? p_end + s->v_end_mm_s * past : p_end, out);
     return false;
 }
 

@@ -13,7 +13,11 @@
  * braking already (j1 < 0 after the lead-in) and needs to brake harder than the plain release of j1 does takes its
  * first ramp from j1: a sin² transition j1 -> jp (jp <= j1, duration pi (j1 - jp) / (2 S), a gain of
  * (j1² - jp²) pi / (4 S) in -a), a plateau at jp and a cos² fall (brakes_on, ramp_from in jstop.c); otherwise j1
- * is released first. The stop is then planned from the state at the end of that (v0', a0'), in three segments
+ * is released first, and a coordinate still accelerating (a > 0 in the travel frame) first brings a to 0 by the
+ * shortest ramp of that change (its own peak jerk, sqrt(2 S a / pi) or J): one ramp from a > 0 down to the
+ * deceleration would have a higher peak jerk and therefore a slower sin² start (the snap of a rise grows as
+ * S² t / J_P) and let the velocity pass what the move itself reaches. The stop is then planned from the state at
+ * the end of that (v0', a0'), in three segments
  *      a |                                      A: ramp a0 -> a1   (jerk pulse: sin² rise, plateau, cos² fall)
  *     a0 |\                                     B: constant a1 for tB (only when a1 = -D is reached)
  *        | \                     ___            C: ramp a1 -> 0
@@ -63,9 +67,9 @@ typedef struct lsm_jstop_limits {
     lsm_real snap_mm_s4;  /* S > 0 */
 } lsm_jstop_limits;
 
-#define LSM_JSTOP_PHASES \
-    8 /* the lead-in (jerk release or the rest of the present jerk phase), two ramps of three
-                              phases and the plateau between them */
+/* At most: the lead-in (the rest of the present jerk phase), a release of the jerk, a ramp of a to 0 (3 phases),
+ * the first ramp (3), the plateau and the last ramp (3). */
+#define LSM_JSTOP_PHASES 12
 
 /* The jerk phase a coordinate is in when the stop is requested (a planned move's phase, scurve.h): its shape, its
  * whole duration, the time already spent in it and its signed amplitude (axis frame). Lets the stop continue it. */
@@ -96,6 +100,8 @@ typedef struct lsm_jstop {
     lsm_real jerk_mm_s3[LSM_JSTOP_PHASES]; /* signed amplitude, travel frame */
     lsm_kin start[LSM_JSTOP_PHASES + 1];   /* travel-frame state at each phase start; [n_phases] = end */
     bool active;
+    bool settle;         /* lsm_jstop_plan_settle: it ends at a constant velocity, not at rest */
+    lsm_real v_end_mm_s; /* settle: that velocity (axis frame) */
 } lsm_jstop;
 
 /* Plans a stop from (p, v, a, j). Errors: LSM_E_NULL, LSM_E_NAN/LSM_E_INF (state or limits), LSM_E_LIMIT
@@ -109,12 +115,22 @@ lsm_status lsm_jstop_plan(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real
 lsm_status lsm_jstop_plan_lead(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
                                const lsm_jstop_lead *lead, const lsm_jstop_limits *lim);
 
+/* Settles the velocity: brings (v, a, j) to a = j = 0 as fast as the limits (J, S; D is not used) allow, with the
+ * lead-in of a stop in the frame where a >= 0 (the rest of a cos² fall, the rest of a sin² rise that lowers a, a
+ * jerk that lowers a kept, one that raises it released), then one ramp of a to 0 (from the kept jerk when that is
+ * faster than releasing it). It ends at the velocity this gives, v_end_mm_s (set by the plan), which lies between v
+ * and what the motion would reach by stopping its acceleration at once. A state with a = j = 0 gives an inactive
+ * plan (v_end = v). Used by a retarget to reach a cruise the move planner starts from (axprof.h). Errors as
+ * lsm_jstop_plan_lead. Control cycle. */
+lsm_status lsm_jstop_plan_settle(lsm_jstop *s, lsm_real p_mm, lsm_real v_mm_s, lsm_real a_mm_s2, lsm_real j_mm_s3,
+                                 const lsm_jstop_lead *lead, const lsm_jstop_limits *lim);
+
 /* The jerk phase of a running stop at its present time, as a lead for the stop that replaces it. False when there is
  * none to continue (not running, or inside a jerk transition, which is no single shape). Control cycle. */
 bool lsm_jstop_lead_now(const lsm_jstop *s, lsm_jstop_lead *out);
 
 /* Advances dt_s seconds and writes the state (axis frame). Returns true while stopping; at the end it writes
- * the exact rest state (v = a = j = 0) and returns false. Control cycle. */
+ * the exact rest state (v = a = j = 0; a settle: v = v_end_mm_s) and returns false. Control cycle. */
 bool lsm_jstop_step(lsm_jstop *s, lsm_real dt_s, lsm_kin *out);
 
 /* Closed-form state at time t_s of the current stage (axis frame), without advancing. Any context. */

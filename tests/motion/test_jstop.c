@@ -249,6 +249,62 @@ static void test_prof_move_and_stop(void **state)
     assert_true(p.k.s_mm == -5.0);
 }
 
+/* lsm_jstop_plan_settle from random states, with and without a lead-in phase: it ends with a = j = 0 at a constant
+ * velocity (v_end_mm_s, then held), the jerk continuous (|dj| <= S dt from the starting jerk on), |j| <= max(|j0|,
+ * J), |a| <= |a0| + pi jl² / (2 S) with jl the larger of |j0| and the lead's amplitude (the rest of a rise of the
+ * jerk, then its release: a random lead need not belong to a move that keeps a within its limits; a move's own lead
+ * does, axprof.h), and v within what that acceleration and the ramps can add. */
+static void test_settle_random(void **state)
+{
+    (void)state;
+    uint64_t r = 0x5DEECE66Dull ^ g_seed;
+    for (unsigned i = 0; i < g_count; i++) {
+        lsm_jstop_limits l;
+        l.decel_mm_s2 = pow(10, 1 + 3 * urand(&r));
+        l.jerk_mm_s3 = l.decel_mm_s2 * pow(10, 0.5 + 2 * urand(&r));
+        l.snap_mm_s4 = l.jerk_mm_s3 * pow(10, 0.5 + 2.5 * urand(&r));
+        const double v = (urand(&r) - 0.5) * 2 * pow(10, 3 * urand(&r));
+        const double a = (urand(&r) - 0.5) * 2 * l.decel_mm_s2;
+        const double dt = 0.001;
+        /* a lead: a sin² rise or cos² fall of the jerk of amplitude up to J, entered part way */
+        lsm_jstop_lead lead;
+        lead.shape = urand(&r) < 0.5 ? LSM_PHASE_RISE : LSM_PHASE_FALL;
+        lead.jerk_mm_s3 = (lsm_real)((urand(&r) - 0.5) * 2 * l.jerk_mm_s3);
+        lead.full_s = (lsm_real)(LSM_PI * fabs((double)lead.jerk_mm_s3) / (2 * l.snap_mm_s4) + 1e-9);
+        lead.off_s = (lsm_real)(urand(&r) * 0.99 * (double)lead.full_s);
+        lsm_real u[4];
+        lsm_phase_unit((lsm_phase_shape)lead.shape, lead.full_s, lead.off_s, u);
+        const double j = (double)(lead.jerk_mm_s3 * u[0]);
+        const bool with_lead = urand(&r) < 0.7 && j != 0;
+        lsm_jstop s;
+        assert_int_equal(lsm_jstop_plan_settle(&s, 0, v, a, j, with_lead ? &lead : NULL, &l), LSM_OK);
+        const double jmax = fmax(fabs(j), l.jerk_mm_s3) * (1 + TOL_REL) + TOL_J_ABS;
+        const double jl = fmax(fabs(j), with_lead ? fabs((double)lead.jerk_mm_s3) : 0);
+        const double amax = (fabs(a) + LSM_PI * jl * jl / (2 * l.snap_mm_s4)) * (1 + TOL_REL) + TOL_ABS;
+        const double vspan = amax * amax / l.jerk_mm_s3 + amax * (LSM_PI * l.jerk_mm_s3 / l.snap_mm_s4 + 4 * dt);
+        double pj = j;
+        lsm_kin k;
+        unsigned n = 0;
+        bool running = s.active;
+        while (running) {
+            running = lsm_jstop_step(&s, dt, &k);
+            assert_true(++n < 10000000u);
+            assert_true(fabs(k.j_mm_s3) <= jmax);
+            assert_true(fabs(k.a_mm_s2) <= amax);
+            assert_true(fabs(k.v_mm_s - v) <= vspan * (1 + TOL_REL) + TOL_ABS * (1 + fabs(v)));
+            if (running)
+                assert_true(fabs(k.j_mm_s3 - pj) <= l.snap_mm_s4 * dt * (1 + 1e-6) + TOL_REL * l.jerk_mm_s3);
+            pj = k.j_mm_s3;
+        }
+        if (n > 0) {
+            assert_true(k.a_mm_s2 == 0 && k.j_mm_s3 == 0);
+            assert_true(k.v_mm_s == s.v_end_mm_s);
+        } else {
+            assert_true(a == 0 && j == 0 && (double)s.v_end_mm_s == (double)(lsm_real)v);
+        }
+    }
+}
+
 int main(int argc, char **argv)
 {
     g_seed = (unsigned)test_arg_u(argc, argv, 1, g_seed);
@@ -258,6 +314,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_decel_plateau),
         cmocka_unit_test(test_at_rest),
         cmocka_unit_test(test_random_states),
+        cmocka_unit_test(test_settle_random),
         cmocka_unit_test(test_prof_move_and_stop),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));

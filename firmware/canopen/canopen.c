@@ -381,10 +381,10 @@ static bool sdo_tick(lsm_canopen *n)
     const uint32_t head = lsm_atomic_get_acquire(&l->res_head);
     while (tail != head) {
         const lsm_canopen_sdo_res *r = &l->res[tail % SDO_Q];
-        if (r->epoch == epoch)
-            (void)lsm_can_txq_push(&n->txq, &r->f); /* full: dropped and counted, the client times out (as before) */
-        else
+        if (r->epoch != epoch)
             l->stale++;
+        else if (!n->bus_off)                       /* bus-off: nothing is queued */
+            (void)lsm_can_txq_push(&n->txq, &r->f); /* full: dropped and counted, the client times out (as before) */
         tail++;
         lsm_atomic_put_release(&l->res_tail, tail);
         did = true;

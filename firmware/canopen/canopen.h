@@ -239,8 +239,8 @@ lsm_status lsm_canopen_rx(lsm_canopen *node, const lsm_can_frame *f, uint32_t no
 
 /* Timers (heartbeat, SDO timeout, event TPDOs), consumer timeouts, axis EMCY events, path/axis coupling,
  * pending NMT reset; with sdo_background: the SDO server's object access (one per call) and its responses into the
- * TX queue (the SDO timeout is then the server's). Call once per control cycle. Returns LSM_OK, LSM_E_CO_BUS_OFF (done, but the controller
- * is bus-off: nothing was queued) or LSM_E_NULL. Tick. */
+ * TX queue (the SDO timeout is then the server's). Call once per control cycle. Returns LSM_OK, LSM_E_CO_BUS_OFF
+ * (done, but the controller is bus-off: nothing was queued) or LSM_E_NULL. Tick. */
 lsm_status lsm_canopen_process(lsm_canopen *node, uint32_t now_us);
 
 /*

@@ -265,10 +265,11 @@ static bool mf_at_rest(const sim_prog *p, size_t next, const lsm_interp *ip)
 {
     if (lsm_interp_state_of(ip) != LSM_INTERP_IDLE)
         return false;
-    const double *want = next > 0 ? sim_prog_block_at(p, next - 1)->b.end : p->start;
-    for (int k = 0; k < LSM_MAX_AXES; k++)
-        if (fabs(ip->pos[k] - want[k]) > 1e-6)
+    for (int k = 0; k < LSM_MAX_AXES; k++) {
+        const double want = next > 0 ? (double)sim_prog_block_at(p, next - 1)->b.end[k] : p->start[k];
+        if (fabs(ip->pos[k] - want) > 1e-6)
             return false;
+    }
     return true;
 }
 

@@ -27,8 +27,9 @@
 #include "simprog.h"
 
 /* SIM_RUN_VPOP_CONT: VPOp held to its jerk limits continuously, not only on its samples' differences (pathrun.c,
- * run_vpop_cont: its jerk limits scaled by the largest factor for which the continuous axis jerk of its own motion,
- * Beudaert eq 3 on the exact path derivatives, at the samples and halfway between them, stays <= J). */
+ * vp_cont_motion: its jerk limits scaled, first by one factor for the whole path, then bin by bin along it, so that
+ * the continuous axis jerk of its own motion, Beudaert eq 3 on the exact path derivatives, at the samples and
+ * halfway between them, stays <= J). */
 typedef enum sim_run_planner { SIM_RUN_LISSOM = 0, SIM_RUN_VPOP = 1, SIM_RUN_VPOP_CONT = 2 } sim_run_planner;
 
 static inline const char *sim_run_planner_name(sim_run_planner p)
@@ -111,7 +112,8 @@ typedef struct sim_run_result {
     double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
     double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
     double cont_jerk_max;        /* vpop: continuous axis jerk / J at the samples and halfway between (-1: n/a) */
-    double vpop_jerk_scale;      /* vpop-cont: the factor its jerk limits were scaled by (1 for vpop; -1: n/a) */
+    double vpop_jerk_scale;      /* vpop-cont: the smallest factor its jerk limits were scaled by anywhere on the path
+                                    (1 for vpop; -1: n/a) */
     sim_run_mfunc *mfuncs;       /* the program's machine functions, in order */
     size_t n_mfuncs;
     size_t prog_held_max;  /* most program blocks + path elements held at once (simprog.h; windowed with

@@ -391,6 +391,11 @@ static double dist_arc(const lsm_geom *g, const double x[3])
     return r1 < best ? r1 : best;
 }
 
+double sim_prog_distance(const lsm_geom *g, const double x[3])
+{
+    return g->kind == LSM_GEOM_LINE ? dist_line(g, x) : dist_arc(g, x);
+}
+
 static double elem_s0(const sim_prog *p, size_t i)
 {
     return i < p->np ? p->s0[i - p->e0] : p->s_next;
@@ -425,8 +430,7 @@ double sim_prog_deviation(const sim_prog *p, const double x[3], uint32_t line, d
         b++;
     double best = INFINITY;
     for (size_t i = a; i <= b; i++) {
-        const lsm_geom *g = &p->path[i - p->e0];
-        const double d = g->kind == LSM_GEOM_LINE ? dist_line(g, x) : dist_arc(g, x);
+        const double d = sim_prog_distance(&p->path[i - p->e0], x);
         if (d < best)
             best = d;
     }

@@ -107,6 +107,9 @@ void sim_prog_trim(sim_prog *p, size_t keep_block, size_t keep_elem);
  * needs are no longer held (a windowed program trimmed too far: the caller's error). */
 double sim_prog_deviation(const sim_prog *p, const double x[3], uint32_t line, double reach_mm, size_t *lo);
 
+/* Distance (X Y Z) from x to one line or arc (helix: every turn) of the path, ends included. */
+double sim_prog_distance(const lsm_geom *g, const double x[3]);
+
 void sim_prog_free(sim_prog *p);
 
 #endif /* LSM_SIM_PROG_H */

@@ -14,6 +14,10 @@
 #define STAIR_LEVEL_RATIO LSM_R(0.6)
 #define STAIR_MIN_STEP LSM_R(0.02)
 #define STAIR_MIN_GAIN_CYCLES LSM_R(2.0)
+/* A staircase candidate is skipped before it is planned when even its bound on the gain (stair_may_gain) falls short
+ * by more than this slack: half a cycle, plus a relative share of the times for their rounding. */
+#define STAIR_PRUNE_SLACK_CYCLES LSM_R(0.5)
+#define STAIR_PRUNE_SLACK_REL LSM_R(1e-4)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* pieces                                                                                                       */
@@ -267,6 +271,17 @@ static bool best_after_step(pctx *sub, lsm_real vc, lsm_real vmax, lsm_real v1, 
     return true;
 }
 
+/* Could a staircase whose gain is at most `bound` beat `need`? The bound holds in exact arithmetic (every speed of
+ * a candidate is at most vmax, and a sin² ramp's time is 2 dist / (v_a + v_b) >= dist / vmax); the slack covers
+ * the rounding of the times (t: their size) and of the positions (x: the length compared, an exact end within
+ * LEN_EPS of it), so that a candidate skipped here would also have been rejected after planning it. */
+static bool stair_may_gain(lsm_real bound, lsm_real need, lsm_real dt, lsm_real t, lsm_real x, lsm_real vmax)
+{
+    const lsm_real slack = STAIR_PRUNE_SLACK_CYCLES * dt + STAIR_PRUNE_SLACK_REL * lsm_fabs(t) +
+                           LSM_R(4.0) * LEN_EPS * (R1 + lsm_fabs(x)) / vmax;
+    return bound + slack > need;
+}
+
 /* One staircase candidate: a first ramp v0 -> vc, then, re-planned from its end, a second one up to best's cruise.
  * Taken into *found when it reaches that cruise (or the end of best's ramp A, xe) sooner than best by more than
  * *gain. With to_end, the second piece is the best one from the end of the first ramp (it need not reach best's
@@ -276,11 +291,22 @@ static void try_step(pctx *pc, const plan5 *best, lsm_real vc, bool exact, bool 
 {
     const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real v0 = best->v0, vmax = best->vc, xe = best->xA + best->A.dist;
+    const lsm_real need = *gain + STAIR_MIN_GAIN_CYCLES * dt; /* the gain to beat */
+    /* best's time to where it is compared (xe, or the end of the piece): no candidate can gain more than what best
+     * loses there against running at vmax all the way */
+    const lsm_real t_best = to_end ? plan_time(best, dt, pc->D) : time_to(best, dt, xe);
+    const lsm_real x_cmp = to_end ? pc->D : xe;
+    if (!stair_may_gain(t_best - x_cmp / vmax, need, dt, t_best, x_cmp, vmax))
+        return;
     plan5 p, q;
     if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
         return;
     const lsm_real x1 = p.xA + p.A.dist;
     if (!(x1 < best->xB))
+        return;
+    /* with the first step known: the second piece needs at least (x_cmp - x1) / vmax */
+    const lsm_real t1 = time_to(&p, dt, x1);
+    if (!stair_may_gain(t_best - t1 - (x_cmp - x1) / vmax, need, dt, t_best + t1, x_cmp, vmax))
         return;
     /* the second ramp, from the end of the first one */
     lsm_pl_seek(pc, x1);

@@ -131,7 +131,7 @@ static const lsm_co_od_entry k_od[] = {
     ENT(0x5010, 0, LSM_CO_T_DOMAIN, LSM_CO_PATH_BLOCK_MAX, W_ | HK_, 0, 0, 0),
     E_U8(0x5020, 0, R_ | TP_, 0, 0, OFF(machine_status)),
     /* manufacturer, the port's tick statistics (lsm_canopen_set_tick_stats) */
-    E_U8(0x5F00, 0, CONST_, 0, 0, 8),
+    E_U8(0x5F00, 0, CONST_, 0, 0, 10),
     E_U32(0x5F00, 1, R_, 0, 0, OFF(tick_stats.ticks)),
     E_U32(0x5F00, 2, R_, 0, 0, OFF(tick_stats.overruns)),
     E_U32(0x5F00, 3, R_, 0, 0, OFF(tick_stats.worst_instr)),
@@ -140,6 +140,8 @@ static const lsm_co_od_entry k_od[] = {
     E_U32(0x5F00, 6, R_, 0, 0, OFF(tick_stats.clock_ms)),
     E_U32(0x5F00, 7, R_, 0, 0, OFF(tick_stats.path_underruns)),
     E_U32(0x5F00, 8, R_, 0, 0, OFF(tick_stats.path_min_ahead)),
+    E_U32(0x5F00, 9, R_, 0, 0, OFF(sdo_link.most_waiting)),
+    E_U32(0x5F00, 10, R_, 0, 0, OFF(sdo_link.refused)),
     /* CiA 402, per axis k at index + 0x800·k */
     E_I16(0x6007, 0, RW_, G_AXIS, R_ABORT_OPT, AX(abort_option)),
     E_U16(0x603F, 0, R_ | TP_, G_AXIS, 0, AX(error_code)),

@@ -106,7 +106,9 @@ typedef enum lsm_can_bus_event {
 } lsm_can_bus_event;
 
 /* Statistics of the port's control tick, shown read-only in object 0x5F00 (sub 1..8). The port fills them
- * (lsm_canopen_set_tick_stats); the node only shows them, and keeps them across an NMT reset. */
+ * (lsm_canopen_set_tick_stats); the node only shows them, and keeps them across an NMT reset. Sub 9 and 10 are the
+ * node's own SDO hand-off counts (lsm_canopen_sdo_stats: most requests waiting, requests refused; 0 in the
+ * one-context mode). */
 typedef struct lsm_canopen_tick_stats {
     uint32_t ticks;            /* sub 1: control ticks since the port started */
     uint32_t overruns;         /* sub 2: ticks that fell due while the one before still ran */

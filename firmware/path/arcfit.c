@@ -9,7 +9,16 @@
 
 /* Tuning of the fit. */
 #define AF_LINE_PREFER LSM_R(0.25) /* a line within tol / 4 is taken without trying an arc (fewer curvature steps) */
-#define AF_ORDER_SLACK LSM_R(1e-9) /* relative slack of "the points follow each other" (rounding of the points) */
+/* Relative slack of "the points follow each other" (rounding): the last point's position along the chord,
+ * (qe - p0).u with u = (qe - p0) / L, comes out up to a few eps above L. 1e-9 is far above that in double but below
+ * float's eps (1.2e-7): float runs whose last point came out an ulp beyond L were no line at all, so a straight pair
+ * of 0.2 mm chords on a flat ellipse became a lone segment with two tiny corners (a dip to 49 mm/s, and a low node
+ * that cost a re-plan per appended arc while it was in the buffer). */
+#if LSM_REAL_IS_FLOAT
+#define AF_ORDER_SLACK LSM_R(1e-6) /* 8 eps of float */
+#else
+#define AF_ORDER_SLACK LSM_R(1e-9)
+#endif
 #define AF_ANGLE_SLACK_RAD LSM_R(1e-9) /* a point this far before the arc's start still counts as at its start */
 #define AF_FLAT_EPS LSM_R(2048.0)      /* an arc's evaluation error R eps times this must stay below tol (float) */
 #define AF_MIN_RADIUS_TOLS LSM_R(4.0)  /* radius at least 4 tol: a smaller circle is not worth an arc at this tol */
@@ -142,7 +151,8 @@ static bool af_check_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, ls
                          const lsm_real e1[3], const lsm_real e2[3], const lsm_real nh[3], lsm_real r, lsm_real sg,
                          lsm_real *err_out, lsm_real *th_end)
 {
-    lsm_real err = R0, eprev = R0, th_prev = R0;
+    /* (the start is on the circle by construction: (r, 0) in the plane) */
+    lsm_real err = R0, eprev = R0, th_prev = R0, xp = r, yp = R0, hp = R0;
     const lsm_real *xprev = p0;
     for (int i = 0; i < n; i++) {
         lsm_real rel[3];
@@ -153,17 +163,32 @@ static bool af_check_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, ls
             th += LSM_R(2.0) * PI_R;
         if (th < th_prev || th > PI_R)
             return false;
-        const lsm_real rho = lsm_sqrt(x1 * x1 + y1 * y1);
+        const lsm_real rho = lsm_sqrt(x1 * x1 + y1 * y1), rho_p = lsm_sqrt(xp * xp + yp * yp);
         const lsm_real e = lsm_sqrt((rho - r) * (rho - r) + h * h);
+        /* the segment from the previous point (chord h): in the plane, its points are no farther from the centre
+         * than its farther end and no nearer than its nearest point (the foot of the perpendicular from the centre,
+         * |a x b| / |b - a|, if it falls inside, else the nearer end); along the normal, between its ends' offsets.
+         * That bound is taken with the sagitta estimate max(e_i, e_i+1) + h²/8r the fits were tuned with, which
+         * alone is no bound: points inside the circle by e put the chord up to about e h²/8r² farther (tight arcs:
+         * 1e-3 mm at r 0.1); the larger of the two keeps every fit the estimate accepted and was a bound for. */
+        const lsm_real dx = x1 - xp, dy = y1 - yp, dd = dx * dx + dy * dy, tf = -(xp * dx + yp * dy);
+        const bool foot_in = dd > R0 && tf > R0 && tf < dd;
+        const lsm_real near = foot_in ? lsm_fabs(xp * y1 - yp * x1) / lsm_sqrt(dd) : lsm_min2(rho, rho_p);
+        const lsm_real radial = lsm_max2(R0, lsm_max2(r - near, lsm_max2(rho, rho_p) - r));
+        const lsm_real axial = lsm_max2(lsm_fabs(h), lsm_fabs(hp));
         lsm_real c[3];
         sub3(q[i].p, xprev, c);
-        const lsm_real seg = lsm_max2(e, eprev) + dot3(c, c) / (LSM_R(8.0) * r);
+        const lsm_real sagitta = lsm_max2(e, eprev) + dot3(c, c) / (LSM_R(8.0) * r);
+        const lsm_real seg = lsm_max2(sagitta, lsm_sqrt(radial * radial + axial * axial));
         err = lsm_max2(err, lsm_max2(e, seg));
         if (err > tol)
             return false;
         th_prev = th;
         eprev = e;
         xprev = q[i].p;
+        xp = x1;
+        yp = y1;
+        hp = h;
     }
     *err_out = err;
     *th_end = th_prev;

@@ -16,9 +16,11 @@
  * rounding of the points (a circle through three close points of a G-code file rounded to 0.1 um can be off by
  * 1/mm in curvature). The candidate line goes from p0 to qn. A candidate fits when every point is within tol of it
  * (in-plane radial and out-of-plane distance), the points follow each other along it, and every segment stays
- * within tol: for a chord of length h between two points within e_i, e_i+1 of a circle of radius r, the segment's
- * distance to the arc is at most max(e_i, e_i+1) + h²/(8r). The error returned is that bound, so the programmed
- * polyline is within `err` of the fitted element everywhere, and vice versa. Arcs span at most pi.
+ * within tol: in the plane, a segment's points are no farther from the centre than its farther end and no nearer
+ * than its line (|a x b| / |b - a| for ends a, b relative to the centre), and along the normal between its ends'
+ * offsets, so its distance to the arc is at most sqrt(radial² + axial²) of those. The error returned is that
+ * bound, so the programmed polyline is within `err` of the fitted element everywhere, and vice versa. Arcs span at
+ * most pi.
  * Units: mm.
  */
 #ifndef LSM_ARCFIT_H

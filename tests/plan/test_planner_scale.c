@@ -314,9 +314,12 @@ static void check_shape(shape_kind kind)
                       n, qa, qb);
     assert_true(qb <= 1.05 * qa && qa <= 1.05 * qb);
     /* cost per point flat from the first points to the last */
-    if (!(cmax <= 2.0 * r.cost[0] + 0.5 && pmax <= 2.0 * r.pieces[0] + 0.05))
+    if (!(cmax <= 2.0 * r.cost[0] + 0.5 && pmax <= 2.0 * r.pieces[0] + 0.05)) {
         print_message("FAILED %s: seed %lu, points %ld: cost per point %.3f -> %.3f, pieces %.4f -> %.4f\n",
                       k_names[kind], g_seed, n, r.cost[0], cmax, r.pieces[0], pmax);
+        for (int w = 0; w < WINDOWS; w++)
+            print_message("  eighth %d: cost per point %.3f, pieces per point %.4f\n", w, r.cost[w], r.pieces[w]);
+    }
     assert_true(cmax <= 2.0 * r.cost[0] + 0.5);
     assert_true(pmax <= 2.0 * r.pieces[0] + 0.05);
 }

@@ -11,7 +11,11 @@
  *   always a line within the tolerance;
  * - random arcs (any plane, R 5 .. 200, 0.1 .. 0.3 mm chords, rounded to 0.1 um): the fit succeeds where its
  *   sagitta model is accurate, and the element it returns and the polyline are within the error bound it reports
- *   of each other (sampled both ways).
+ *   of each other (sampled both ways);
+ * - the plane of a chain of arcs measured over its points (lsm_arcfit_chain) recovers a rounded ring's plane from a
+ *   chain plane tilted by 1e-4 .. 3e-4 rad (random rings, a quarter turn);
+ * - a given plane: lines projected into it, arcs refused beyond drift_mm (the line then closes the chain), line-only
+ *   kinds.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -112,11 +116,11 @@ static void test_float_straight_pair(void **state)
     const lsm_real p0[3] = {LSM_R(-9.2979002), LSM_R(22.6646004), LSM_R(-4.5896001)};
     lsm_arcfit_pt q[2] = {{{LSM_R(-9.4898996), LSM_R(22.6089001), LSM_R(-4.5896001)}, 1},
                           {{LSM_R(-9.6816998), LSM_R(22.5522995), LSM_R(-4.5896001)}, 2}};
-    const lsm_real nz[3] = {0, 0, 1};
+    const lsm_arcfit_plane nz = {{0, 0, 1}, 0, LSM_ARCFIT_PLANE_NORMAL};
     for (int with_plane = 0; with_plane < 2; with_plane++) {
         lsm_geom g;
         lsm_arcfit_result r;
-        const bool ok = lsm_arcfit_fit(p0, q, 2, (lsm_real)TOL, with_plane ? nz : NULL, &g, &r);
+        const bool ok = lsm_arcfit_fit(p0, q, 2, (lsm_real)TOL, with_plane ? &nz : NULL, &g, &r);
         if (!ok || r.kind != LSM_ARCFIT_LINE)
             print_message("FAILED straight pair (plane %d): ok %d kind %d\n", with_plane, ok, (int)r.kind);
         assert_true(ok);
@@ -229,14 +233,129 @@ static void test_arcs_random(void **state)
     print_message("arcs_random: %d of %llu fitted as arcs\n", arcs, g_count);
 }
 
+/* The angle between a unit vector and a unit normal, |a x b| (acos of the dot product cannot resolve float normals:
+ * 6e-8 of rounding in the dot product is 3.5e-4 rad). */
+static double angle_to(const lsm_real a[3], const double b[3])
+{
+    const double x[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    return sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+}
+
+/* A ring in a tilted plane (normal nt), rounded to 0.1 um: point i of 0.2 mm chords from phase ph. */
+static void ring_pt(const double c[3], const double e1[3], const double e2[3], double R, double ph, long i,
+                    lsm_real out[3])
+{
+    const double a = ph + i * 2.0 * asin(0.1 / R);
+    for (int k = 0; k < 3; k++)
+        out[k] = (lsm_real)rnd4(c[k] + R * (cos(a) * e1[k] + sin(a) * e2[k]));
+}
+
+/* The chain's measured plane: a chain plane tilted by 1e-4 .. 3e-4 rad from a rounded ring's; over a quarter turn of
+ * its points, lsm_arcfit_chain_plane recovers the ring's normal to the rounding (~1e-6 rad; the tilt itself, the
+ * plane of one run's points, is what left the ring running as segments: test_planner_scale, test_ring3d_seeds). */
+static void test_chain_plane_random(void **state)
+{
+    (void)state;
+    uint64_t rs = g_seed * 0x61C8864680B583EBull + 3u;
+    const unsigned long long count = g_count / 20 + 1;
+    for (unsigned long long c = 0; c < count; c++) {
+        const double R = test_uni(&rs, 10, LSM_REAL_IS_FLOAT ? 30 : 60), ph = test_uni(&rs, 0, 6.283185307179586);
+        const double th = test_uni(&rs, 0, 6.283185307179586), tl = test_uni(&rs, 0.1, 1.4);
+        const double nt[3] = {sin(tl) * cos(th), sin(tl) * sin(th), cos(tl)};
+        double e1[3] = {-sin(th), cos(th), 0}, e2[3], ctr[3];
+        e2[0] = nt[1] * e1[2] - nt[2] * e1[1];
+        e2[1] = nt[2] * e1[0] - nt[0] * e1[2];
+        e2[2] = nt[0] * e1[1] - nt[1] * e1[0];
+        for (int k = 0; k < 3; k++)
+            ctr[k] = test_uni(&rs, -20, 20);
+        /* the chain's plane: nt tilted by 1e-4 .. 3e-4 about a random in-plane axis */
+        const double tilt = test_uni(&rs, 1e-4, 3e-4), ax = test_uni(&rs, 0, 6.283185307179586);
+        lsm_real nc[3];
+        double nl = 0;
+        for (int k = 0; k < 3; k++) {
+            const double v = nt[k] + tilt * (cos(ax) * e1[k] + sin(ax) * e2[k]);
+            nl += v * v;
+        }
+        for (int k = 0; k < 3; k++)
+            nc[k] = (lsm_real)((nt[k] + tilt * (cos(ax) * e1[k] + sin(ax) * e2[k])) / sqrt(nl));
+        lsm_arcfit_chain ch;
+        lsm_real o[3];
+        ring_pt(ctr, e1, e2, R, ph, 0, o);
+        lsm_arcfit_chain_reset(&ch, o);
+        const long quarter = (long)(0.25 * 6.283185307179586 * R / 0.2);
+        for (long i = 1; i <= quarter; i++) {
+            lsm_arcfit_pt q;
+            ring_pt(ctr, e1, e2, R, ph, i, q.p);
+            q.seq = (uint32_t)i;
+            lsm_arcfit_chain_add(&ch, nc, &q, 1);
+        }
+        lsm_real nm[3];
+        assert_true(lsm_arcfit_chain_plane(&ch, nc, nm));
+        const double err = angle_to(nm, nt), err0 = angle_to(nc, nt);
+        /* the measured plane keeps the ring within tol / 50 over its diameter (the rounding of the points: ~1e-6 rad
+         * at R 15 over a quarter turn) */
+        const double bound = TOL / 50.0 / (2.0 * R);
+        if (!(err <= bound))
+            print_message("FAILED chain plane %llu (seed %llu): R %.2f, chain plane off by %.3g rad, measured %.3g\n",
+                          c, g_seed, R, err0, err);
+        assert_true(err <= bound);
+    }
+}
+
+/* In a given plane: a line ends on the last point's projection (its offset is part of the error), an arc is refused
+ * once a point leaves the plane by more than drift_mm (a line then closes the chain: `drifted`), and the line-only
+ * kinds give lines. */
+static void test_given_plane(void **state)
+{
+    (void)state;
+    /* a circle R 40 through p0 in the plane z = 0, the points rising off it (a tilt of 4e-4 rad about X) */
+    const lsm_real p0[3] = {40, 0, 0};
+    lsm_arcfit_pt q[24];
+    for (int i = 0; i < 24; i++) {
+        const double a = (i + 1) * 0.005;
+        q[i].p[0] = (lsm_real)(40 * cos(a));
+        q[i].p[1] = (lsm_real)(40 * sin(a));
+        q[i].p[2] = (lsm_real)(40 * sin(a) * 4e-4); /* up to 1.9 um at the last point, 0.64 um at the 8th */
+        q[i].seq = (uint32_t)i;
+    }
+    lsm_arcfit_plane pc = {{0, 0, 1}, (lsm_real)0.004, LSM_ARCFIT_PLANE_NORMAL};
+    lsm_geom g;
+    lsm_arcfit_result r;
+    /* within drift 4 um: an arc in z = 0, ending off the last point by its height */
+    assert_true(lsm_arcfit_fit(p0, q, 24, (lsm_real)TOL, &pc, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_ARC);
+    assert_int_equal(r.drifted, 0);
+    lsm_real e[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_geom_eval(&g, g.len, e, NULL, NULL), LSM_OK);
+    assert_true(fabs((double)e[2] - (double)p0[2]) <= 1e-6);
+    /* drift 0.5 um: no arc; the line in the plane closes the chain */
+    pc.drift_mm = (lsm_real)0.0005;
+    assert_true(lsm_arcfit_fit(p0, q, 8, (lsm_real)TOL, &pc, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_LINE);
+    assert_int_equal(r.drifted, 1);
+    assert_true(r.end_mm[2] == p0[2]); /* projected: z of p0 */
+    assert_true((double)r.err_mm >= (double)q[7].p[2] - 1e-9 && (double)r.err_mm <= TOL);
+    assert_true(fabs((double)g.u.line.dir[2]) <= 1e-12);
+    /* line only, in the plane or free */
+    pc.kind = LSM_ARCFIT_LINE_IN;
+    assert_true(lsm_arcfit_fit(p0, q, 8, (lsm_real)TOL, &pc, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_LINE);
+    assert_true(r.end_mm[2] == p0[2]);
+    pc.kind = LSM_ARCFIT_LINE_FREE;
+    assert_true(lsm_arcfit_fit(p0, q, 8, (lsm_real)TOL, &pc, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_LINE);
+    assert_true(r.end_mm[0] == q[7].p[0] && r.end_mm[1] == q[7].p[1] && r.end_mm[2] == q[7].p[2]);
+    assert_false(lsm_arcfit_fit(p0, q, 24, (lsm_real)TOL, &pc, &g, &r)); /* (no line within tol, and no arc) */
+}
+
 int main(int argc, char **argv)
 {
     g_seed = test_arg_u(argc, argv, 1, 1);
     g_count = test_arg_u(argc, argv, 2, 400);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_float_straight_pair),
-        cmocka_unit_test(test_straight_runs_random),
-        cmocka_unit_test(test_arcs_random),
+        cmocka_unit_test(test_float_straight_pair), cmocka_unit_test(test_straight_runs_random),
+        cmocka_unit_test(test_arcs_random),         cmocka_unit_test(test_chain_plane_random),
+        cmocka_unit_test(test_given_plane),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

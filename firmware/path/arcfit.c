@@ -24,6 +24,11 @@
 #define AF_MIN_RADIUS_TOLS LSM_R(4.0)     /* radius at least 4 tol: a smaller circle is not worth an arc at this tol */
 #define AF_CHAIN_MIN_POINTS LSM_R(16.0)   /* a chain's plane is measured from at least this many points */
 #define AF_CHAIN_MIN_SPREAD_MM LSM_R(0.5) /* whose spread across the plane is at least this (both ways) */
+#if LSM_REAL_IS_FLOAT
+#define AF_CONTAINS_TOL LSM_R(1e-6) /* the chord's own plane holds a line when |n . d| is below this (rounding) */
+#else
+#define AF_CONTAINS_TOL LSM_R(1e-10)
+#endif
 #define AF_DRIFT_SHARE LSM_R(0.5) /* in a given plane, points at most tol / 2 off it: a line there still fits after */
 
 static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
@@ -96,6 +101,20 @@ static bool unit3(const lsm_real v[3], lsm_real o[3])
     return true;
 }
 
+/* A frame (eu, ev) of the plane with unit normal n (the same for the same n). */
+static void af_frame(const lsm_real n[3], lsm_real eu[3], lsm_real ev[3])
+{
+    const int k = lsm_fabs(n[0]) <= lsm_fabs(n[1]) && lsm_fabs(n[0]) <= lsm_fabs(n[2]) ? 0
+                  : lsm_fabs(n[1]) <= lsm_fabs(n[2])                                   ? 1
+                                                                                       : 2;
+    const lsm_real ek[3] = {k == 0 ? R1 : R0, k == 1 ? R1 : R0, k == 2 ? R1 : R0};
+    lsm_real a[3];
+    cross3(n, ek, a);
+    if (!unit3(a, eu))
+        eu[0] = R1, eu[1] = eu[2] = R0;
+    cross3(n, eu, ev);
+}
+
 /* The chord direction u (unit; on entry the chord's) projected into the plane with unit normal nh. */
 static bool af_into_plane(const lsm_real nh[3], lsm_real u[3])
 {
@@ -142,7 +161,24 @@ static af_plane_kind af_plane(const lsm_real p0[3], const lsm_arcfit_pt *q, int 
             return AF_PLANE_NONE;
         return af_into_plane(nh, u) ? AF_PLANE_OK : AF_PLANE_NONE;
     }
-    return af_plane_free(p0, q, n, L, u, nh);
+    const af_plane_kind kf = af_plane_free(p0, q, n, L, u, nh);
+    if (pc == NULL || pc->kind != LSM_ARCFIT_PLANE_CONTAINS)
+        return kf;
+    lsm_real d[3];
+    if (!unit3(pc->v, d))
+        return AF_PLANE_NONE;
+    if (kf != AF_PLANE_OK)
+        return kf;
+    const lsm_real nd = dot3(nh, d);
+    if (lsm_fabs(nd) <= AF_CONTAINS_TOL)
+        return AF_PLANE_OK; /* the chord's own plane holds the line (a planar program) */
+    /* turned the least to hold it (a chord of the same curve, rounded, is off its plane by about rounding / chord) */
+    lsm_real w[3];
+    for (int i = 0; i < 3; i++)
+        w[i] = nh[i] - nd * d[i];
+    if (!unit3(w, nh))
+        return AF_PLANE_NONE;
+    return af_into_plane(nh, u) ? AF_PLANE_OK : AF_PLANE_NONE;
 }
 
 /* Curvature by least squares over the points, sagitta model y(t) = k t (L - t) / 2 (robust to the rounding of the
@@ -336,20 +372,6 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* the plane of a chain of arcs, measured                                                                       */
-
-/* A frame (eu, ev) of the plane with unit normal n (the same for the same n). */
-static void af_frame(const lsm_real n[3], lsm_real eu[3], lsm_real ev[3])
-{
-    const int k = lsm_fabs(n[0]) <= lsm_fabs(n[1]) && lsm_fabs(n[0]) <= lsm_fabs(n[2]) ? 0
-                  : lsm_fabs(n[1]) <= lsm_fabs(n[2])                                   ? 1
-                                                                                       : 2;
-    const lsm_real ek[3] = {k == 0 ? R1 : R0, k == 1 ? R1 : R0, k == 2 ? R1 : R0};
-    lsm_real a[3];
-    cross3(n, ek, a);
-    if (!unit3(a, eu))
-        eu[0] = R1, eu[1] = eu[2] = R0;
-    cross3(n, eu, ev);
-}
 
 void lsm_arcfit_chain_reset(lsm_arcfit_chain *c, const lsm_real origin[3])
 {

@@ -48,14 +48,17 @@ typedef struct lsm_arcfit_result {
 
 /* What the fitted element must keep to (the block before the run: corner.h blends planar joints only). */
 typedef enum lsm_arcfit_plane_kind {
-    LSM_ARCFIT_PLANE_NORMAL = 1, /* after a fitted arc: an arc lies in the plane through p0 with normal v, and a line
+    LSM_ARCFIT_PLANE_NORMAL = 1,  /* after a fitted arc: an arc lies in the plane through p0 with normal v, and a line
                                   * too (it ends on q[n-1] projected into the plane) */
-    LSM_ARCFIT_LINE_FREE = 2,    /* a line only */
-    LSM_ARCFIT_LINE_IN = 3       /* a line only, in the plane through p0 with normal v (projected as above) */
+    LSM_ARCFIT_LINE_FREE = 2,     /* a line only */
+    LSM_ARCFIT_LINE_IN = 3,       /* a line only, in the plane through p0 with normal v (projected as above) */
+    LSM_ARCFIT_PLANE_CONTAINS = 4 /* after a line of direction v: an arc lies in a plane through p0 that contains v
+                                   * (the chord's own turned the least to hold v; the arc then ends on q[n-1]'s
+                                   * projection); lines are free */
 } lsm_arcfit_plane_kind;
 
 typedef struct lsm_arcfit_plane {
-    lsm_real v[3];     /* the normal (need not be unit) */
+    lsm_real v[3];     /* the normal, or the line's direction (need not be unit) */
     lsm_real drift_mm; /* NORMAL: an arc only while every point is within this of the plane (<= tol; 0: tol / 2) */
     uint8_t kind;      /* lsm_arcfit_plane_kind */
 } lsm_arcfit_plane;

@@ -5,6 +5,9 @@
 /* How far (share of the fit tolerance) the points may leave the plane of a chain of fitted arcs: the rest is for the
  * line in that plane that closes the chain when they leave it (its error is their offset plus its sagitta). */
 #define CHAIN_DRIFT LSM_R(0.5)
+/* tail_switch after a closing line whose chain was too short to measure its plane: a free line, then as after any
+ * line (run_plane) */
+#define SW_BACK_ONLY 4u
 /* A vertex turning by less than this (rad) is straight: no transition, no feed limit. */
 #define VERTEX_STRAIGHT_RAD LSM_R(1e-9)
 /* Small-angle closed form of corner.h: a transition's half-length is this many tolerances per radian of turn. */
@@ -95,11 +98,18 @@ static const lsm_arcfit_plane *run_plane(const lsm_planner *pl, lsm_arcfit_plane
         pc->kind = LSM_ARCFIT_PLANE_NORMAL;
         return pc;
     }
-    if (blk(pl, pl->tail - 1u)->g.kind != LSM_GEOM_LINE || pl->tail_switch == 0)
+    const lsm_pblock *prev = blk(pl, pl->tail - 1u);
+    if (prev->g.kind != LSM_GEOM_LINE || prev->g.rotary_only)
         return NULL;
-    pc->kind = pl->tail_switch == 1   ? LSM_ARCFIT_LINE_FREE
-               : pl->tail_switch == 2 ? LSM_ARCFIT_LINE_IN
-                                      : LSM_ARCFIT_PLANE_NORMAL;
+    if (pl->tail_switch == 0) { /* after a line that ends on a programmed point: a plane that holds it */
+        pc->kind = LSM_ARCFIT_PLANE_CONTAINS;
+        for (int i = 0; i < 3; i++)
+            pc->v[i] = prev->g.u.line.dir[i];
+        return pc;
+    }
+    pc->kind = pl->tail_switch == 1 || pl->tail_switch == SW_BACK_ONLY ? LSM_ARCFIT_LINE_FREE
+               : pl->tail_switch == 2                                  ? LSM_ARCFIT_LINE_IN
+                                                                       : LSM_ARCFIT_PLANE_NORMAL;
     return pc;
 }
 
@@ -165,9 +175,14 @@ static void chain_step(lsm_planner *pl, const lsm_geom *g, const lsm_arcfit_resu
     lsm_real nn[3];
     if (in_chain && fr->drifted) { /* the line that closes the chain: its points left the chain's plane */
         lsm_arcfit_chain_add(&pl->chain, chain_n, pl->fit_pt, (int)n);
-        if (!lsm_arcfit_chain_plane(&pl->chain, chain_n, nn))
+        if (!lsm_arcfit_chain_plane(&pl->chain, chain_n, nn)) {
+            pl->tail_switch =
+                SW_BACK_ONLY; /* (too few points to measure: back onto the points, then as after a line) */
             return;
+        }
         sw = 0u;
+    } else if (sw == SW_BACK_ONLY) {
+        return;
     } else if (sw != 0u) {
         for (int i = 0; i < 3; i++)
             nn[i] = chain_n[i];

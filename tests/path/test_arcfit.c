@@ -15,7 +15,7 @@
  * - the plane of a chain of arcs measured over its points (lsm_arcfit_chain) recovers a rounded ring's plane from a
  *   chain plane tilted by 1e-4 .. 3e-4 rad (random rings, a quarter turn);
  * - a given plane: lines projected into it, arcs refused beyond drift_mm (the line then closes the chain), line-only
- *   kinds.
+ *   kinds, and after a line an arc whose plane holds it.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -346,6 +346,17 @@ static void test_given_plane(void **state)
     assert_int_equal(r.kind, LSM_ARCFIT_LINE);
     assert_true(r.end_mm[0] == q[7].p[0] && r.end_mm[1] == q[7].p[1] && r.end_mm[2] == q[7].p[2]);
     assert_false(lsm_arcfit_fit(p0, q, 24, (lsm_real)TOL, &pc, &g, &r)); /* (no line within tol, and no arc) */
+    /* after a line (its direction the chord to the first point, off the points' plane by their rounding-scale
+     * rise): an arc whose plane holds that line */
+    lsm_arcfit_plane pl = {{q[0].p[0] - p0[0], q[0].p[1] - p0[1], q[0].p[2] - p0[2] + (lsm_real)1e-5},
+                           0,
+                           LSM_ARCFIT_PLANE_CONTAINS};
+    assert_true(lsm_arcfit_fit(p0, q, 24, (lsm_real)TOL, &pl, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_ARC);
+    const double dl = sqrt((double)(pl.v[0] * pl.v[0] + pl.v[1] * pl.v[1] + pl.v[2] * pl.v[2]));
+    const double dn = ((double)pl.v[0] * r.normal[0] + (double)pl.v[1] * r.normal[1] + (double)pl.v[2] * r.normal[2]);
+    assert_true(fabs(dn) / dl <= (LSM_REAL_IS_FLOAT ? 1e-6 : 1e-12));
+    assert_true((double)r.err_mm <= TOL);
 }
 
 int main(int argc, char **argv)

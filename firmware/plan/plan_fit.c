@@ -176,18 +176,16 @@ static void chain_step(lsm_planner *pl, const lsm_geom *g, const lsm_arcfit_resu
     if (in_chain && fr->drifted) { /* the line that closes the chain: its points left the chain's plane */
         lsm_arcfit_chain_add(&pl->chain, chain_n, pl->fit_pt, (int)n);
         if (!lsm_arcfit_chain_plane(&pl->chain, chain_n, nn)) {
-            pl->tail_switch =
-                SW_BACK_ONLY; /* (too few points to measure: back onto the points, then as after a line) */
+            /* too few points to measure: back onto the points, then as after any line */
+            pl->tail_switch = SW_BACK_ONLY;
             return;
         }
         sw = 0u;
-    } else if (sw == SW_BACK_ONLY) {
+    } else if (sw == 0u || sw == SW_BACK_ONLY) {
         return;
-    } else if (sw != 0u) {
+    } else {
         for (int i = 0; i < 3; i++)
             nn[i] = chain_n[i];
-    } else {
-        return;
     }
     for (int i = 0; i < 3; i++)
         pl->tail_n[i] = nn[i];

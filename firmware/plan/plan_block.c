@@ -307,10 +307,10 @@ bool lsm_pl_geom_end(const lsm_geom *g, const lsm_real start[LSM_MAX_AXES], cons
 static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
                      const lsm_arcfit_result *fr, lsm_real fit_err)
 {
-    if (g->kind == LSM_GEOM_LINE) {
+    if (g->kind == LSM_GEOM_LINE && (fr == NULL || fr->kind != LSM_ARCFIT_LINE)) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
             pl->tail_pos[i] = prog_end[i];
-    } else {
+    } else { /* (a fitted line may end on its last point's projection into a fitted arc's plane: arcfit.h) */
         lsm_real p[LSM_MAX_AXES];
         const bool same = lsm_pl_geom_end(g, pl->tail_pos, prog_end, p);
         for (int i = 0; i < LSM_MAX_AXES; i++)
@@ -322,6 +322,7 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     pl->tail_rotary = geom_moves_rotary(g) ? 1u : 0u;
     pl->tail_fit_err = fit_err;
     pl->tail_arc = 0;
+    pl->tail_switch = 0; /* (plan_fit.c sets it after a chain's closing line) */
     if (g->kind == LSM_GEOM_ARC && fr != NULL && fr->kind == LSM_ARCFIT_ARC) {
         pl->tail_arc = 1; /* a fitted arc: the next run's arc stays in its plane */
         for (int i = 0; i < 3; i++)

@@ -2,6 +2,12 @@
  * per-vertex transitions would limit the feed (planner.h, "Blocks and corners"). */
 #include "planner_int.h"
 
+/* How far (share of the fit tolerance) the points may leave the plane of a chain of fitted arcs: the rest is for the
+ * line in that plane that closes the chain when they leave it (its error is their offset plus its sagitta). */
+#define CHAIN_DRIFT LSM_R(0.5)
+/* tail_switch after a closing line whose chain was too short to measure its plane: a free line, then as after any
+ * line (run_plane) */
+#define SW_BACK_ONLY 4u
 /* A vertex turning by less than this (rad) is straight: no transition, no feed limit. */
 #define VERTEX_STRAIGHT_RAD LSM_R(1e-9)
 /* Small-angle closed form of corner.h: a transition's half-length is this many tolerances per radian of turn. */
@@ -69,6 +75,44 @@ static bool run_needs_fit(const lsm_planner *pl, uint32_t n)
     return false;
 }
 
+/* The plane a run's element keeps to (arcfit.h); NULL: any (then an arc must hold the line before it:
+ * arc_fits_tail). Chains of fitted arcs and their change of plane (lsm_arcfit_chain):
+ *   - in a chain (the last block a fitted arc), its elements stay in its plane, and the points may leave it by
+ *     CHAIN_DRIFT of the fit tolerance (its first plane came from one run's rounded points: a tilted ring leaves it
+ *     within a turn);
+ *   - the first run that leaves it is a line in that plane, which closes the chain (arcfit.h: `drifted`); then, with
+ *     the plane measured over the chain's points, a free line (back onto the points: the closing line ended off them
+ *     by their offset from the chain's plane), a line in the measured plane through that line's end (a programmed
+ *     point), and a new chain in the measured plane (tail_switch 1, 2, 3). Every joint is planar (an arc and a line
+ *     in its plane, or two lines), so corner.h blends it G2 within the tolerance; the lines cost a dip of the feed
+ *     where they are (the trims of their corners are short), once: the measured plane holds (test_planner_scale). */
+static const lsm_arcfit_plane *run_plane(const lsm_planner *pl, lsm_arcfit_plane *pc)
+{
+    if (pl->tail == pl->head)
+        return NULL;
+    const lsm_real tfit = pl->cfg.fit_share * pl->fit_tol;
+    for (int i = 0; i < 3; i++)
+        pc->v[i] = pl->tail_n[i];
+    pc->drift_mm = CHAIN_DRIFT * tfit;
+    if (pl->tail_arc) {
+        pc->kind = LSM_ARCFIT_PLANE_NORMAL;
+        return pc;
+    }
+    const lsm_pblock *prev = blk(pl, pl->tail - 1u);
+    if (prev->g.kind != LSM_GEOM_LINE || prev->g.rotary_only)
+        return NULL;
+    if (pl->tail_switch == 0) { /* after a line that ends on a programmed point: a plane that holds it */
+        pc->kind = LSM_ARCFIT_PLANE_CONTAINS;
+        for (int i = 0; i < 3; i++)
+            pc->v[i] = prev->g.u.line.dir[i];
+        return pc;
+    }
+    pc->kind = pl->tail_switch == 1 || pl->tail_switch == SW_BACK_ONLY ? LSM_ARCFIT_LINE_FREE
+               : pl->tail_switch == 2                                  ? LSM_ARCFIT_LINE_IN
+                                                                       : LSM_ARCFIT_PLANE_NORMAL;
+    return pc;
+}
+
 /* The previous block and a fitted arc must share a plane (corner.h blends planar joints only). */
 static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
 {
@@ -88,14 +132,15 @@ static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
 static bool run_element(const lsm_planner *pl, uint32_t n, lsm_geom *g, lsm_arcfit_result *fr)
 {
     const lsm_real tfit = pl->cfg.fit_share * pl->fit_tol;
-    bool fitted =
-        n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, pl->tail_arc ? pl->tail_n : NULL, g, fr);
+    lsm_arcfit_plane pc;
+    bool fitted = n >= 2u && lsm_arcfit_fit(pl->tail_pos, pl->fit_pt, (int)n, tfit, run_plane(pl, &pc), g, fr);
     if (fitted && fr->kind == LSM_ARCFIT_ARC && (!arc_fits_tail(pl, fr) || !run_needs_fit(pl, n)))
         fitted = false;
     if (fitted && fr->kind == LSM_ARCFIT_LINE) {
+        /* (its end: the last point, or in a fitted arc's plane that point's projection there: arcfit.h) */
         lsm_real end[LSM_MAX_AXES];
         for (int i = 0; i < LSM_MAX_AXES; i++)
-            end[i] = i < 3 ? pl->fit_pt[n - 1u].p[i] : pl->tail_pos[i];
+            end[i] = i < 3 ? fr->end_mm[i] : pl->tail_pos[i];
         if (lsm_geom_line_init(g, pl->tail_pos, end) != LSM_OK)
             fitted = false;
     }
@@ -111,6 +156,40 @@ static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const ls
     if (n >= 2u && fits && (fr->kind == LSM_ARCFIT_LINE || (needs_fit && arc_fits_tail(pl, fr))))
         return 3u;
     return 3u * n;
+}
+
+/* After a fitted element of the first n pending points was appended (it started at `start`; before it: a fitted
+ * arc of plane chain_n (in_chain), or the change of plane at step sw (run_plane)): the chain's measurement, and the
+ * next step of a change of plane. */
+static void chain_step(lsm_planner *pl, const lsm_geom *g, const lsm_arcfit_result *fr, uint32_t n,
+                       const lsm_real start[3], bool in_chain, uint8_t sw, const lsm_real chain_n[3])
+{
+    if (fr->kind == LSM_ARCFIT_ARC) {
+        if (!in_chain)
+            lsm_arcfit_chain_reset(&pl->chain, start);
+        lsm_arcfit_chain_add(&pl->chain, fr->normal, pl->fit_pt, (int)n);
+        return;
+    }
+    if (g->kind != LSM_GEOM_LINE)
+        return;
+    lsm_real nn[3];
+    if (in_chain && fr->drifted) { /* the line that closes the chain: its points left the chain's plane */
+        lsm_arcfit_chain_add(&pl->chain, chain_n, pl->fit_pt, (int)n);
+        if (!lsm_arcfit_chain_plane(&pl->chain, chain_n, nn)) {
+            /* too few points to measure: back onto the points, then as after any line */
+            pl->tail_switch = SW_BACK_ONLY;
+            return;
+        }
+        sw = 0u;
+    } else if (sw == 0u || sw == SW_BACK_ONLY) {
+        return;
+    } else {
+        for (int i = 0; i < 3; i++)
+            nn[i] = chain_n[i];
+    }
+    for (int i = 0; i < 3; i++)
+        pl->tail_n[i] = nn[i];
+    pl->tail_switch = (uint8_t)(sw < 3u ? sw + 1u : 3u);
 }
 
 /* Emits the first n pending points: one fitted arc or line if that helps, else their segments as they are. */
@@ -135,7 +214,13 @@ lsm_status lsm_pl_emit_run(lsm_planner *pl, uint32_t n)
         for (int i = 0; i < 3; i++)
             end[i] = pl->fit_pt[n - 1u].p[i];
         mv.seq = pl->fit_pt[n - 1u].seq;
+        const lsm_real start[3] = {pl->tail_pos[0], pl->tail_pos[1], pl->tail_pos[2]};
+        const lsm_real chain_n[3] = {pl->tail_n[0], pl->tail_n[1], pl->tail_n[2]};
+        const bool in_chain = pl->tail_arc != 0;
+        const uint8_t sw = pl->tail_switch;
         st = lsm_pl_append_geom(pl, &g, &mv, end, &fr);
+        if (st == LSM_OK)
+            chain_step(pl, &g, &fr, n, start, in_chain, sw, chain_n);
     } else {
         for (uint32_t i = 0; i < n && st == LSM_OK; i++) {
             for (int k = 0; k < 3; k++)
@@ -170,7 +255,7 @@ lsm_status lsm_pl_emit_run_exact(lsm_planner *pl)
     lsm_geom g;
     lsm_arcfit_result fr;
     lsm_real end[LSM_MAX_AXES], prog[LSM_MAX_AXES];
-    if (!run_element(pl, n, &g, &fr) || fr.kind != LSM_ARCFIT_ARC)
+    if (!run_element(pl, n, &g, &fr))
         return lsm_pl_emit_run(pl, n);
     for (int i = 0; i < LSM_MAX_AXES; i++)
         prog[i] = i < 3 ? pl->fit_pt[n - 1u].p[i] : pl->tail_pos[i];
@@ -211,8 +296,9 @@ static lsm_status add_fit_point(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES
             cand[pl->fit_n].p[k] = end[k];
         cand[pl->fit_n].seq = mv->seq;
         lsm_geom tg;
+        lsm_arcfit_plane pc;
         fits = lsm_arcfit_fit(pl->tail_pos, cand, (int)pl->fit_n + 1, pl->cfg.fit_share * mv->tol_mm,
-                              pl->tail_arc ? pl->tail_n : NULL, &tg, &fr);
+                              run_plane(pl, &pc), &tg, &fr);
         if (!fits) {
             st = lsm_pl_emit_run(pl, pl->fit_n); /* the run ends before this point (its room was reserved) */
             if (st != LSM_OK)

@@ -250,13 +250,15 @@ lsm_status lsm_planner_flush(lsm_planner *pl)
     return lsm_pl_emit_run(pl, pl->fit_n);
 }
 
-/* The program ends exactly on its programmed end: a fitted arc that ends off it (an arc kept in the previous arc's
- * plane ends off its last point by that point's distance from the plane, within the fit tolerance: plan_fit.c) is
+/* The program ends exactly on its programmed end: a fitted arc or line that ends off it (kept in the previous arc's
+ * plane, it ends off its last point by that point's distance from the plane, within the fit tolerance: plan_fit.c) is
  * followed by a line to it. (A pending run is split for that by lsm_pl_emit_run_exact; this covers a run emitted
  * when it reached LSM_ARCFIT_MAX points with the program's last point.) */
 static lsm_status end_exactly(lsm_planner *pl)
 {
-    if (pl->tail == pl->head || !pl->tail_arc) /* (tail_arc: the last block is a fitted arc) */
+    /* (tail_arc: the last block is a fitted arc; a fitted line has a fit error, and may end on its last point's
+     * projection into the plane of the arc before it) */
+    if (pl->tail == pl->head || !(pl->tail_arc || pl->tail_fit_err > R0))
         return LSM_OK;
     if (pl->tail_pos[0] == pl->tail_prog[0] && pl->tail_pos[1] == pl->tail_prog[1] &&
         pl->tail_pos[2] == pl->tail_prog[2])

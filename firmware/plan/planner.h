@@ -261,11 +261,13 @@ typedef struct lsm_planner {
     uint32_t fit_n;
     lsm_real fit_feed, fit_tol;
     lsm_real tail_fit_err; /* fitting error of the last block (its corners get the rest of the tolerance) */
-    lsm_real tail_n[3];    /* the last block is a fitted arc with this plane normal (tail_arc) */
+    lsm_real tail_n[3];    /* the last block is a fitted arc with this plane normal (tail_arc), or the line that
+                              closed a chain of them and the arcs after it take this plane (tail_switch) */
     uint8_t tail_arc;
-    uint8_t fit_need;  /* a vertex of the pending run limits the feed (its arc fit is used) */
-    uint8_t fit_slots; /* slots the pending run takes when it is emitted (reserved as it grows) */
-    uint8_t reserved2;
+    uint8_t fit_need;       /* a vertex of the pending run limits the feed (its arc fit is used) */
+    uint8_t fit_slots;      /* slots the pending run takes when it is emitted (reserved as it grows) */
+    uint8_t tail_switch;    /* see tail_n */
+    lsm_arcfit_chain chain; /* the plane of the current chain of fitted arcs, measured (arcfit.h) */
     lsm_planner_stats stats;
 } lsm_planner;
 

@@ -95,11 +95,11 @@ lsm_status __wrap_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, cons
 }
 
 bool __real_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_real *plane_n, lsm_geom *g, lsm_arcfit_result *res);
+                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
 bool __wrap_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_real *plane_n, lsm_geom *g, lsm_arcfit_result *res);
+                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
 bool __wrap_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_real *plane_n, lsm_geom *g, lsm_arcfit_result *res)
+                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res)
 {
     const uint32_t t0 = now();
     const bool r = __real_lsm_arcfit_fit(p0, q, n, tol_mm, plane_n, g, res);

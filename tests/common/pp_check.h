@@ -16,10 +16,13 @@
  * Float build only, and only for |v| of the own state of a planned move: the move engine's known float cruise
  * rounding (test_ppscan.c, MOVE_CRUISE_V_REL: up to 7.0e-6 relative, firmware/profile/move.c) is allowed with
  * PP_MOVE_V_REL when the caller says the cycle is a move's (pp_check_kin2 with in_move); and, likewise only for the
- * cycles of a planned move in float, a step of v at the join of a long ramp and the cruise of up to PP_MOVE_DV_REL V
- * beyond A dt (test_pp_props seed 3, case 395: a type-0 move from rest to 178 mm/s over 1.96 s with A = 91 mm/s²,
- * the cruise 0.0137 mm/s = 7.7e-5 V off the ramp's float end; a plain move, no request: firmware/profile/move.c's
- * float evaluation of long phases, reported, not fixed here).
+ * cycles of a planned move in float, a step of v where the cruise joins the ramps of up to PP_MOVE_DV_POS_ULPS ulps
+ * of the largest |position| over dt beyond A dt: move.c takes the cruise's feed from the positions of the two ramps'
+ * ends, (s8 - s7) / tc (lsm_move_phase_starts: the positions join exactly, so the setpoints have no step), and each
+ * of those float positions is within PP_POS_ULPS ulps, so that feed is off the ramp's own end velocity by up to
+ * 2 PP_POS_ULPS ulp(|p|) / tc <= that over dt: the bound of the positions' first difference (pp_check_diffs, n = 1).
+ * (test_pp_props seed 3, case 395: a type-0 move from rest to 178 mm/s over 1.96 s with A = 91 mm/s², the cruise
+ * 0.0137 mm/s off the ramp's float end.)
  */
 #ifndef PP_CHECK_H
 #define PP_CHECK_H
@@ -39,9 +42,9 @@
 #define PP_ULP_REL ((double)FLT_EPSILON)
 #define PP_CHECK_DIFF_ORDER 1
 #define PP_MOVE_V_REL 8e-6
-#define PP_MOVE_DV_REL 1e-4
+#define PP_MOVE_DV_POS_ULPS (2 * PP_POS_ULPS)
 #else
-#define PP_MOVE_DV_REL 0.0
+#define PP_MOVE_DV_POS_ULPS 0.0
 #define PP_ULP_REL DBL_EPSILON
 #define PP_CHECK_DIFF_ORDER 4
 #define PP_MOVE_V_REL 0.0
@@ -129,7 +132,8 @@ static inline void pp_check_kin2(pp_checker *c, const lsm_kin *k, bool in_move)
         pp_check_note(c, 2, k->j_mm_s3, c->J * (1 + nz), "j");
         if (c->S > 0)
             pp_check_note(c, 3, k->j_mm_s3 - p->j_mm_s3, c->S * c->dt + nz * c->J, "dj/dt (snap) dt");
-        pp_check_note(c, 4, k->v_mm_s - p->v_mm_s, c->A * c->dt + (nz + (in_move ? PP_MOVE_DV_REL : 0)) * c->V, "dv");
+        const double dv_pos = in_move ? PP_MOVE_DV_POS_ULPS * PP_ULP_REL * c->pmax / c->dt : 0;
+        pp_check_note(c, 4, k->v_mm_s - p->v_mm_s, c->A * c->dt + nz * c->V + dv_pos, "dv");
         pp_check_note(c, 5, k->a_mm_s2 - p->a_mm_s2, c->J * c->dt + nz * c->A, "da");
         pp_check_diffs(c);
     }

@@ -241,11 +241,6 @@ lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t k
     return start_stop(p, lim, kind);
 }
 
-lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind)
-{
-    return lsm_axprof_stop(p, lim, kind); /* every stop starts in the cycle it is requested in */
-}
-
 static void step_move(lsm_axprof *p)
 {
     lsm_real pos;

@@ -98,14 +98,11 @@ void lsm_axprof_init(lsm_axprof *p, lsm_real cycle_s, lsm_real pos_mm);
  * Control cycle (the context that steps the generator). */
 lsm_status lsm_axprof_move(lsm_axprof *p, lsm_real target_mm, const lsm_axprof_limits *lim);
 
-/* Starts a stop with these limits from the present state p->k (inside a jerk pulse of a move: from the end of
- * the pulse, see above), unless a stop at least as strong (kind) already runs. Cancels a pending retarget. At rest (IDLE with v = a = 0): nothing. Returns LSM_OK or a
- * lsm_jstop_plan error (then the state is held: it cannot happen with validated limits). Control cycle. */
+/* Starts a stop with these limits from the present state p->k, in this cycle (also inside a jerk pulse of a move,
+ * see above), unless a stop at least as strong (kind) already runs. Cancels a pending retarget. At rest (IDLE with
+ * v = a = 0): nothing. Returns LSM_OK or a lsm_jstop_plan error (then the state is held: it cannot happen with
+ * validated limits). Control cycle. */
 lsm_status lsm_axprof_stop(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
-
-/* The same as lsm_axprof_stop (kept for the callers of quick stops, E-stops and fault reactions, which must begin in
- * the cycle they are seen in: every stop now does). Control cycle. */
-lsm_status lsm_axprof_stop_urgent(lsm_axprof *p, const lsm_jstop_limits *lim, uint8_t kind);
 
 /* One cycle. Returns true if the coordinate moved during it. Control cycle. */
 bool lsm_axprof_step(lsm_axprof *p);

@@ -131,10 +131,7 @@ static void axis_stop(lsm_motion *m, unsigned k, const lsm_cia402 *ax, lsm_cia40
         a->prof.k.a_mm_s2 = acc;
         a->csp_active = false;
     }
-    if (kind >= LSM_CIA402_STOP_QUICK) /* quick stop, E-stop, fault reaction: begins in this cycle */
-        (void)lsm_axprof_stop_urgent(&a->prof, &sl, (uint8_t)kind);
-    else
-        (void)lsm_axprof_stop(&a->prof, &sl, (uint8_t)kind);
+    (void)lsm_axprof_stop(&a->prof, &sl, (uint8_t)kind); /* every stop begins in this cycle */
     a->pp_running = false;
     a->pp_wait = false; /* a plan in the background is dropped */
 }
@@ -470,7 +467,7 @@ static void tick_abort(lsm_motion *m, lsm_co_path *cp)
         const lsm_axis_limits *l = &m->lim[k];
         const lsm_jstop_limits sl = {l->a_max_mm_s2, l->j_max_mm_s3, l->snap_max_mm_s4};
         abort_state(m, k, &a->prof.k);
-        (void)lsm_axprof_stop_urgent(&a->prof, &sl, (uint8_t)LSM_CIA402_STOP_EMERGENCY);
+        (void)lsm_axprof_stop(&a->prof, &sl, (uint8_t)LSM_CIA402_STOP_EMERGENCY);
     }
     lsm_co_path_reject(cp, t->last.rep.active_seq); /* the path is dropped: EMCY 0xFF01, buffer flushed */
     tick_abort_step(m, cp);

@@ -33,9 +33,9 @@
  *
  * Contexts. Two: the control cycle (tick: an interrupt on the board) and the background (the main loop).
  *   tick        lsm_motion_tick (= _tick_begin + _tick_end), lsm_motion_feedback, lsm_motion_stop_all: the node's
- *               axis objects and path buffer are the tick's (canopen.h: one context per node). Stops, PP, CSP
- *               are evaluated here; quick stops and E-stops begin in the cycle they are seen in
- *               (lsm_axprof_stop_urgent; a stop plan is a bisection, bounded). With lead_cycles > 0 a PP
+ *               axis objects and path buffer are the tick's (canopen.h: the dictionary is the tick's; the SDO
+ *               protocol may run in the background). Stops, PP, CSP are evaluated here; every stop begins in the
+ *               cycle it is seen in (lsm_axprof_stop; a stop plan is a bisection, bounded). With lead_cycles > 0 a PP
  *               set-point's move plan (lsm_axprof_move, 40-250 k instructions on the M4) is the background's: the
  *               move starts 8 cycles after the set-point is taken (MO_PP_PLAN_CYCLES); with lead 0 the tick plans
  *               it at once. For the path the tick only takes the set-point the background made and reports it.

@@ -45,6 +45,8 @@ static double pick_cycle(void)
 }
 
 static long g_shown;
+/* differing moves by their total cycles against the reference's: same, fewer, more; and status changes */
+static long g_same_cycles, g_fewer_cycles, g_more_cycles, g_status_changed;
 static void show(const char *fam, long c, const char *what)
 {
     if (g_shown++ < 12)
@@ -114,6 +116,17 @@ static bool same_move(const lsm_move_request *r, const char *fam, long c)
     const lsm_status sb = ref_lsm_move_plan(&b, r);
     if (sa == sb && (sa != LSM_OK || !memcmp(&a, &b, sizeof a)))
         return true;
+    if (sa != sb) {
+        g_status_changed++;
+    } else {
+        const uint32_t na = lsm_move_total_cycles(&a), nb = lsm_move_total_cycles(&b);
+        if (na == nb)
+            g_same_cycles++;
+        else if (na < nb)
+            g_fewer_cycles++;
+        else
+            g_more_cycles++;
+    }
     char s[400];
     snprintf(s, sizeof s,
              "status %d vs ref %d; acc (%u %u %u) vs (%u %u %u), dec (%u %u %u) vs (%u %u %u), nc %u vs %u; "
@@ -194,7 +207,9 @@ int main(int argc, char **argv)
     static const char *const fams[] = {"r2r", "feeds", "short", "sync", "paper"};
     for (unsigned f = 0; f < sizeof fams / sizeof fams[0]; f++) {
         const long d = family_moves(fams[f], fams[f][0] == 's' && fams[f][1] == 'y' ? count / 4 : count);
-        printf("%s: %ld differ\n", fams[f], d);
+        printf("%s: %ld differ (same cycles %ld, fewer %ld, more %ld, status %ld)\n", fams[f], d, g_same_cycles,
+               g_fewer_cycles, g_more_cycles, g_status_changed);
+        g_same_cycles = g_fewer_cycles = g_more_cycles = g_status_changed = 0;
         total += d;
     }
     printf("total: %ld differ\n", total);

@@ -138,6 +138,186 @@ static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D
     return LSM_OK;
 }
 
+/* One tried peak feed of the strict search: its quantised ramps and their distance. */
+typedef struct peak_try {
+    lsm_real v;      /* peak feed vp */
+    lsm_real d;      /* distance of the two ramps v0 -> vp -> v1 (mm); -1 on overflow */
+    uint32_t ta, td; /* their total cycles */
+    shape sh;        /* their intervals (nc unused) */
+} peak_try;
+
+/* The largest number of peaks the strict search tries (it usually stops after 2-5). */
+#define PEAK_TRIES 64
+
+static bool try_peak(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real v1, lsm_real vp, peak_try *p)
+{
+    p->v = vp;
+    p->d = ramps_shape(L, dt, v0, vp, v1, LSM_SCURVE_RULE_STRICT, &p->sh);
+    p->ta = lsm_scurve_total_cycles(&p->sh.acc);
+    p->td = lsm_scurve_total_cycles(&p->sh.dec);
+    return p->d >= 0;
+}
+
+/*
+ * The root of a tried peak's distance line: with its ramp totals Ta, Td (cycles) fixed, the ramps travel
+ * ((v0 + vp) Ta + (vp + v1) Td) dt / 2, linear in vp; it equals D at (2 D / dt - v0 Ta - v1 Td) / (Ta + Td).
+ * Totals never decrease with the peak, so the quantised distance is at least this line above the tried peak and
+ * at most it below: a feasible try's root bounds the answer from above, an infeasible try's root from below.
+ */
+static lsm_real peak_root(const peak_try *p, lsm_real d2_dt, lsm_real v0, lsm_real v1)
+{
+    const uint32_t n = p->ta + p->td;
+    if (n == 0)
+        return LSM_REAL_MAX;
+    return (d2_dt - v0 * (lsm_real)p->ta - v1 * (lsm_real)p->td) / (lsm_real)n;
+}
+
+static bool same_totals(const peak_try *a, const peak_try *b)
+{
+    return a->ta == b->ta && a->td == b->td;
+}
+
+/* No ramp total lies strictly between the two tries' (so no third distance line lies between them). */
+static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ramp)
+{
+    const uint32_t da = hi->ta - lo->ta, dd = hi->td - lo->td;
+    return one_ramp ? da == 1 : da + dd == 1;
+}
+
+/* Relative step past a ramp's velocity capacity that leaves it for sure (a few ulp of the feed). */
+#define PAST_CAPACITY (8 * LSM_REAL_EPS)
+
+/*
+ * lo and hi are on adjacent lines and every feasible peak between them has lo's totals. Several intervals can
+ * share those totals (n1, n2 and n4 traded against each other); the sizing takes the one with the larger eq-34
+ * denominator while it holds the velocity change, so the intervals change within lo's line as the peak grows.
+ * The answer is the one just below the jump: step past the velocity capacity of lo's intervals until the totals
+ * change (usually once).
+ */
+static void last_intervals(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real v1, peak_try *lo,
+                           const peak_try *hi, lsm_real D)
+{
+    const lsm_scurve_limits sl = ramp_limits(L);
+    lsm_real past = PAST_CAPACITY;
+    for (int k = 0; k < 6; k++) {
+        const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sl, dt, &lo->sh.acc),
+                                      v1 + lsm_scurve_dv_capacity(&sl, dt, &lo->sh.dec));
+        const lsm_real x = lsm_max2(cap, lo->v) * (1 + past);
+        peak_try m;
+        if (!(x > lo->v && x < hi->v) || !try_peak(L, dt, v0, v1, x, &m))
+            return;
+        if (!same_totals(&m, lo) || m.d > D)
+            return;
+        if (iv_equal(&m.sh.acc, &lo->sh.acc) && iv_equal(&m.sh.dec, &lo->sh.dec))
+            past *= 8; /* the capacity's rounding kept the intervals: step further */
+        *lo = m;
+    }
+}
+
+typedef enum peak_kind { PEAK_ROOT_LO, PEAK_ROOT_HI, PEAK_VMAX, PEAK_INNER } peak_kind;
+
+/* False position's share of the bracket kept clear at either end (the inner step never lands on an end). */
+#define PEAK_INNER_MIN LSM_R(0.05)
+
+/*
+ * The inner step: false position on the distance between lo and hi (half way if hi overflowed), within the part of
+ * the bracket that the two roots leave open ([max(lo, root(hi)), min(hi, root(lo))]).
+ */
+static lsm_real inner_peak(const peak_try *lo, const peak_try *hi, bool hi_sized, lsm_real rl, lsm_real rh, lsm_real D)
+{
+    const lsm_real a = lsm_max2(lo->v, rh), b = lsm_min2(hi->v, rl);
+    lsm_real f = LSM_R(0.5);
+    if (hi_sized && hi->d > lo->d)
+        f = (D - lo->d) / (hi->d - lo->d);
+    const lsm_real x = lo->v + (hi->v - lo->v) * f;
+    const lsm_real w = (b - a) * PEAK_INNER_MIN;
+    return b > a ? lsm_min2(lsm_max2(x, a + w), b - w) : lo->v + (hi->v - lo->v) / 2;
+}
+
+/*
+ * Strict rule: the ramp intervals of the largest peak vp in [max(v0, v1), v_max] whose quantised ramps travel at
+ * most D (the minimal-time shape before the exact fit, as single_shape finds it). The distance is a step-wise
+ * linear, non-decreasing function of vp (one line per pair of ramp totals). The search alternates a false-position
+ * step with a step to the root of the line of the peak it just tried (peak_root), and ends when
+ *   - a root tried has the totals of the peak whose root it is: the distance crosses D there, on that line;
+ *   - the bracket's two ends have the same totals: the answer is at the root of their common line;
+ *   - lo and hi have adjacent totals, lo's root lies beyond hi and hi's before lo: the distance jumps over D
+ *     between them, the answer is lo's line.
+ * v_max is tried only when lo's root reaches it.
+ */
+static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1,
+                                    shape *sh)
+{
+    const lsm_real vmax = L->v_max_mm_s, d2_dt = 2 * D / dt;
+    const bool one_ramp = v0 == v1;
+    peak_try lo, hi, m;
+    if (!try_peak(L, dt, v0, v1, lsm_max2(v0, v1), &lo))
+        return LSM_E_TOO_LONG;
+    if (lo.d > D)
+        return LSM_E_INFEASIBLE;
+    hi = lo;
+    hi.v = vmax;
+    bool hi_tried = false, hi_sized = false; /* hi: an infeasible try (sized: not an overflow) */
+    bool root_next = false;                  /* the last try was an inner one: try its root next */
+    bool last_lo = true;                     /* ... and it became lo (else hi); lo is the first try */
+    const peak_try *ans = &lo;
+    for (int i = 0; i < PEAK_TRIES; i++) {
+        const lsm_real rl = peak_root(&lo, d2_dt, v0, v1);
+        const lsm_real rh = hi_sized ? peak_root(&hi, d2_dt, v0, v1) : lo.v;
+        if (hi_sized && same_totals(&lo, &hi)) {
+            /* one line spans the bracket: the answer is at its root */
+            if (!(iv_equal(&lo.sh.acc, &hi.sh.acc) && iv_equal(&lo.sh.dec, &hi.sh.dec)) &&
+                try_peak(L, dt, v0, v1, lsm_min2(lsm_max2(rl, lo.v), hi.v), &m))
+                ans = &m;
+            break;
+        }
+        if (!(rl > lo.v))
+            break; /* lo is at its own line's root */
+        if (hi_tried && !(rh > lo.v) && !(rl < hi.v) && hi_sized && adjacent_totals(&lo, &hi, one_ramp)) {
+            /* the distance jumps over D between lo's line and hi's: the answer is the intervals that lo's totals
+             * have just below the jump */
+            last_intervals(L, dt, v0, v1, &lo, &hi, D);
+            break;
+        }
+        lsm_real x;
+        peak_kind kind;
+        if (!hi_tried && !(rl < vmax)) {
+            x = vmax;
+            kind = PEAK_VMAX;
+        } else if ((root_next || !hi_tried) && last_lo && rl < hi.v) {
+            x = rl;
+            kind = PEAK_ROOT_LO;
+        } else if (root_next && !last_lo && rh > lo.v && rh < hi.v) {
+            x = rh;
+            kind = PEAK_ROOT_HI;
+        } else {
+            x = inner_peak(&lo, &hi, hi_sized, rl, rh, D);
+            kind = PEAK_INNER;
+            if (!(x > lo.v && x < hi.v))
+                break; /* the bracket is down to adjacent feeds */
+        }
+        const bool sized = try_peak(L, dt, v0, v1, x, &m);
+        if (sized && ((kind == PEAK_ROOT_LO && same_totals(&m, &lo)) || (kind == PEAK_ROOT_HI && same_totals(&m, &hi)))) {
+            ans = &m; /* the distance crosses D at this root, on this line */
+            break;
+        }
+        root_next = kind == PEAK_INNER || kind == PEAK_VMAX;
+        last_lo = sized && m.d <= D;
+        if (last_lo) {
+            lo = m;
+            if (kind == PEAK_VMAX)
+                break; /* v_max itself fits */
+        } else {
+            hi = m;
+            hi_tried = true;
+            hi_sized = sized;
+        }
+    }
+    sh->acc = ans->sh.acc;
+    sh->dec = ans->sh.dec;
+    return LSM_OK;
+}
+
 /*
  * With the ramp intervals of sh fixed, the fastest cruise length for which this axis's cruise feed keeps both
  * ramps within the limits and under v_max. The feed is vc(nc) = num / (ta/2 + nc dt + td/2) (eq (1) of move.h)
@@ -220,8 +400,14 @@ static lsm_real alt_peak(int k, lsm_real vp, lsm_real v0, lsm_real v1, lsm_real 
  */
 static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
 {
+    lsm_status st = strict_peak_shape(L, dt, D, v0, v1, best);
+    if (st != LSM_OK)
+        return st;
+    if (window_nc(L, dt, D, v0, v1, best))
+        return LSM_OK;
+    /* the fallback starts from single_shape's peak (and its shape, which may also fit) */
     lsm_real vp;
-    lsm_status st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
+    st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
     if (st != LSM_OK)
         return st;
     if (window_nc(L, dt, D, v0, v1, best))

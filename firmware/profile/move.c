@@ -149,13 +149,21 @@ typedef struct peak_try {
 /* The largest number of peaks the strict search tries (it usually stops after 2-5). */
 #define PEAK_TRIES 64
 
-static bool try_peak(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real v1, lsm_real vp, peak_try *p)
+/* Sizes both ramps of peak vp (as ramps_shape does, strict rule, with the axis's sizer). */
+static bool try_peak(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, lsm_real vp, peak_try *p)
 {
     p->v = vp;
-    p->d = ramps_shape(L, dt, v0, vp, v1, LSM_SCURVE_RULE_STRICT, &p->sh);
+    p->d = -1;
+    if (!lsm_scurve_sizer_intervals(sz, lsm_fabs(vp - v0), &p->sh.acc))
+        return false;
+    if (v1 == v0)
+        p->sh.dec = p->sh.acc;
+    else if (!lsm_scurve_sizer_intervals(sz, lsm_fabs(vp - v1), &p->sh.dec))
+        return false;
     p->ta = lsm_scurve_total_cycles(&p->sh.acc);
     p->td = lsm_scurve_total_cycles(&p->sh.dec);
-    return p->d >= 0;
+    p->d = ((v0 + vp) * (lsm_real)p->ta + (vp + v1) * (lsm_real)p->td) * sz->cycle_s / 2;
+    return true;
 }
 
 /*
@@ -194,17 +202,16 @@ static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ram
  * The answer is the one just below the jump: step past the velocity capacity of lo's intervals until the totals
  * change (usually once).
  */
-static void last_intervals(const lsm_axis_limits *L, lsm_real dt, lsm_real v0, lsm_real v1, peak_try *lo,
+static void last_intervals(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, peak_try *lo,
                            const peak_try *hi, lsm_real D)
 {
-    const lsm_scurve_limits sl = ramp_limits(L);
     lsm_real past = PAST_CAPACITY;
     for (int k = 0; k < 6; k++) {
-        const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sl, dt, &lo->sh.acc),
-                                      v1 + lsm_scurve_dv_capacity(&sl, dt, &lo->sh.dec));
+        const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.acc),
+                                      v1 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.dec));
         const lsm_real x = lsm_max2(cap, lo->v) * (1 + past);
         peak_try m;
-        if (!(x > lo->v && x < hi->v) || !try_peak(L, dt, v0, v1, x, &m))
+        if (!(x > lo->v && x < hi->v) || !try_peak(sz, v0, v1, x, &m))
             return;
         if (!same_totals(&m, lo) || m.d > D)
             return;
@@ -235,6 +242,35 @@ static lsm_real inner_peak(const peak_try *lo, const peak_try *hi, bool hi_sized
 }
 
 /*
+ * A first guess at the peak of a move from rest to rest, from the continuous (unquantised) ramp of scurve.h: the
+ * ramps v -> 0 and 0 -> v travel d(v) = v Tc(v), with Tc = 4 t1 + 2 t2 + t4 the ramp's duration, and d(v) = D is
+ * solved in the regime that binds (derived here from eqs 25-37):
+ *   eq 29 binds (v < v_a = 4 DJ t1³ / pi):  Tc = 4 cbrt(pi v / (4 DJ)),  so v = (D³ DJ / (16 pi))^(1/4);
+ *   t1 fixed, T2 grows (t2 <= t2a):         with u = 2 t1 + t2, v = jc (u - t1) u and D = 2 jc (u - t1) u²
+ *                                            (Newton from cbrt(D / 2jc) + t1, an upper bound of u);
+ *   A binds, T4 grows:                       Tc = 2 t1 + t2a + v / A,  so v² / A + (2 t1 + t2a) v = D.
+ * Only a starting point for the search (which checks everything on the quantised ramps); non-finite if the
+ * limits overflow it.
+ */
+static lsm_real rest_peak_guess(const lsm_scurve_sizer *sz, lsm_real D)
+{
+    const lsm_real A = sz->lim.a_max_mm_s2, DJ = sz->lim.snap_max_mm_s4, t1 = sz->t1_s, jc = sz->jc_mm_s3;
+    const lsm_real pi = (lsm_real)LSM_PI;
+    const lsm_real v_a = 4 * DJ * t1 * t1 * t1 / pi;
+    if (D <= 4 * t1 * v_a)
+        return lsm_sqrt(lsm_sqrt(D * D * D * DJ / (16 * pi)));
+    const lsm_real b = 2 * t1 + lsm_max2(sz->t2a_s, 0);
+    if (D <= 2 * jc * (b - t1) * b * b) {
+        const lsm_real c = D / (2 * jc);
+        lsm_real u = lsm_min2(lsm_cbrt(c) + t1, b);
+        for (int k = 0; k < 2; k++)
+            u -= (u * u * (u - t1) - c) / (u * (3 * u - 2 * t1));
+        return jc * (u - t1) * u;
+    }
+    return 2 * D / (b + lsm_sqrt(b * b + 4 * D / A));
+}
+
+/*
  * Strict rule: the ramp intervals of the largest peak vp in [max(v0, v1), v_max] whose quantised ramps travel at
  * most D (the minimal-time shape before the exact fit, as single_shape finds it). The distance is a step-wise
  * linear, non-decreasing function of vp (one line per pair of ramp totals). The search alternates a false-position
@@ -250,8 +286,11 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
 {
     const lsm_real vmax = L->v_max_mm_s, d2_dt = 2 * D / dt;
     const bool one_ramp = v0 == v1;
+    const lsm_scurve_limits sl = ramp_limits(L);
+    lsm_scurve_sizer sz;
+    lsm_scurve_sizer_init(&sz, &sl, dt);
     peak_try lo, hi, m;
-    if (!try_peak(L, dt, v0, v1, lsm_max2(v0, v1), &lo))
+    if (!try_peak(&sz, v0, v1, lsm_max2(v0, v1), &lo))
         return LSM_E_TOO_LONG;
     if (lo.d > D)
         return LSM_E_INFEASIBLE;
@@ -267,7 +306,7 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
         if (hi_sized && same_totals(&lo, &hi)) {
             /* one line spans the bracket: the answer is at its root */
             if (!(iv_equal(&lo.sh.acc, &hi.sh.acc) && iv_equal(&lo.sh.dec, &hi.sh.dec)) &&
-                try_peak(L, dt, v0, v1, lsm_min2(lsm_max2(rl, lo.v), hi.v), &m))
+                try_peak(&sz, v0, v1, lsm_min2(lsm_max2(rl, lo.v), hi.v), &m))
                 ans = &m;
             break;
         }
@@ -276,12 +315,22 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
         if (hi_tried && !(rh > lo.v) && !(rl < hi.v) && hi_sized && adjacent_totals(&lo, &hi, one_ramp)) {
             /* the distance jumps over D between lo's line and hi's: the answer is the intervals that lo's totals
              * have just below the jump */
-            last_intervals(L, dt, v0, v1, &lo, &hi, D);
+            last_intervals(&sz, v0, v1, &lo, &hi, D);
             break;
         }
         lsm_real x;
         peak_kind kind;
-        if (!hi_tried && !(rl < vmax)) {
+        if (i == 0 && v0 == 0 && v1 == 0) {
+            /* from rest to rest: start at the continuous model's peak (or v_max if that is beyond it) */
+            x = rest_peak_guess(&sz, D);
+            kind = PEAK_INNER;
+            if (!(x < vmax)) {
+                x = vmax;
+                kind = PEAK_VMAX;
+            } else if (!(x > lo.v)) {
+                x = lo.v + (vmax - lo.v) / 2;
+            }
+        } else if (!hi_tried && !(rl < vmax)) {
             x = vmax;
             kind = PEAK_VMAX;
         } else if ((root_next || !hi_tried) && last_lo && rl < hi.v) {
@@ -296,7 +345,7 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
             if (!(x > lo.v && x < hi.v))
                 break; /* the bracket is down to adjacent feeds */
         }
-        const bool sized = try_peak(L, dt, v0, v1, x, &m);
+        const bool sized = try_peak(&sz, v0, v1, x, &m);
         if (sized && ((kind == PEAK_ROOT_LO && same_totals(&m, &lo)) || (kind == PEAK_ROOT_HI && same_totals(&m, &hi)))) {
             ans = &m; /* the distance crosses D at this root, on this line */
             break;

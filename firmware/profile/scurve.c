@@ -166,52 +166,89 @@ static void try_candidate(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv
 #define CBRT_SKIP LSM_R(1.001)
 #define CBRT_SKIP_MIN LSM_R(1e-30)
 
-bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                 lsm_scurve_intervals *iv)
+void lsm_scurve_sizer_init(lsm_scurve_sizer *sz, const lsm_scurve_limits *lim, lsm_real cycle_s)
 {
-    iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
-    if (!(dv_mm_s > 0))
-        return true;
-    const lsm_real A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4;
-    /* continuous optimum as a guide (eqs 25, 26, 29, 35, 32, 27, 30) */
-    lsm_real t1c = PI_R * J / (2 * DJ);
-    t1c = lsm_min2(t1c, lsm_sqrt(PI_R * A / (2 * DJ)));
-    const lsm_real x_f = PI_R * dv_mm_s / (4 * DJ), m3 = t1c * t1c * t1c;
-    if (!(m3 >= CBRT_SKIP_MIN && x_f >= CBRT_SKIP * m3))
-        t1c = lsm_min2(t1c, lsm_cbrt(x_f));
-    const lsm_real jc = 2 * t1c * DJ / PI_R;
-    const lsm_real t2a = A / jc - t1c;
-    const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
-    const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
+    const lsm_real A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4, dt = cycle_s;
+    sz->lim = *lim;
+    sz->cycle_s = dt;
+    /* the guide's dv-free part (eqs 25, 26), exactly as lsm_scurve_strict_intervals computes it */
+    lsm_real t1 = PI_R * J / (2 * DJ);
+    t1 = lsm_min2(t1, lsm_sqrt(PI_R * A / (2 * DJ)));
+    sz->t1_s = t1;
+    const lsm_real m3 = t1 * t1 * t1;
+    sz->cbrt_skip_s3 = m3 >= CBRT_SKIP_MIN ? CBRT_SKIP * m3 : LSM_REAL_MAX;
+    sz->cbrt_x_per_dv = PI_R / (4 * DJ) * (1 - LB_MARGIN); /* x_f per unit dv, rounded down (skip test only) */
+    sz->jc_mm_s3 = 2 * t1 * DJ / PI_R;
+    sz->t2a_s = A / sz->jc_mm_s3 - t1;
+    sz->c1_cycles = to_count(lsm_floor(t1 / dt + (lsm_real)0.5));
+    const lsm_real keep = 1 - LB_MARGIN;
+    sz->kj_per_dv = keep / (J * dt * dt);
+    sz->ka_per_dv = keep / (A * dt);
+    sz->ks_per_dv = keep * PI_R / (2 * DJ * dt * dt * dt);
+}
 
-    const uint32_t c1 = to_count(lsm_floor(t1c / cycle_s + (lsm_real)0.5));
-    const uint32_t c2 = to_count(lsm_floor(t2c / cycle_s + (lsm_real)0.5));
-    if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
-        return false;
+/* The window search: the best-ranked candidate (total, den, scan order) of the window around (c1, c2). */
+static bool window_best(const lsm_scurve_sizer *sz, lsm_real dv, uint32_t c1, uint32_t c2, lsm_scurve_intervals *iv)
+{
     const uint32_t n1_lo = c1 > 3 ? c1 - 2 : 1, n1_hi = c1 + 2;
     const uint32_t n2_lo = c2 > 2 ? c2 - 2 : 0, n2_hi = c2 + 2;
     /* the window: n1 in [n1_lo, n1_hi]; n2 in [n2_lo, n2_hi], plus 0 (the profile without T2 and T6) */
     const uint32_t n_k = n2_hi - n2_lo + (n2_lo > 0 ? 2 : 1);
-
-    const lsm_real dt2 = cycle_s * cycle_s;
-    const lsm_real keep = 1 - LB_MARGIN;
-    const total_bound bnd = {keep * (dv_mm_s / (J * dt2)), keep * (dv_mm_s / (A * cycle_s)),
-                             keep * (PI_R * dv_mm_s / (2 * DJ * dt2 * cycle_s))};
+    /* the bounds' constants scale with dv (products: their rounding is inside LB_MARGIN's) */
+    const total_bound bnd = {sz->kj_per_dv * dv, sz->ka_per_dv * dv, sz->ks_per_dv * dv};
     cand_best best = {0, 0, 0, false};
     /* the guide's own candidate first: usually the winner, it lets the bounds skip most of the others */
     const uint32_t g1 = c1 < n1_lo ? n1_lo : c1;
     const uint32_t g_order = (g1 - n1_lo) * n_k + (c2 - n2_lo);
-    try_candidate(lim, cycle_s, dv_mm_s, g1, c2, g_order, &best, iv);
+    try_candidate(&sz->lim, sz->cycle_s, dv, g1, c2, g_order, &best, iv);
     for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
         for (uint32_t k = 0; k < n_k; k++) {
             const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
             const uint32_t order = (n1 - n1_lo) * n_k + k;
             if (order == g_order || (best.found && cannot_tie(&bnd, n1, n2, best.total)))
                 continue;
-            try_candidate(lim, cycle_s, dv_mm_s, n1, n2, order, &best, iv);
+            try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
         }
     }
     return best.found;
+}
+
+bool lsm_scurve_sizer_intervals(const lsm_scurve_sizer *sz, lsm_real dv_mm_s, lsm_scurve_intervals *iv)
+{
+    iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
+    if (!(dv_mm_s > 0))
+        return true;
+    const lsm_real A = sz->lim.a_max_mm_s2, DJ = sz->lim.snap_max_mm_s4, dt = sz->cycle_s;
+    /* continuous optimum as a guide (eqs 25, 26, 29, 35, 32, 27, 30); the dv-free part is the sizer's */
+    lsm_real t1c = sz->t1_s, jc = sz->jc_mm_s3, t2a = sz->t2a_s;
+    uint32_t c1 = sz->c1_cycles;
+    if (!(dv_mm_s * sz->cbrt_x_per_dv >= sz->cbrt_skip_s3)) {
+        const lsm_real t1f = lsm_cbrt(PI_R * dv_mm_s / (4 * DJ));
+        if (t1f < t1c) { /* eq 29 binds: the dv-free part changes */
+            t1c = t1f;
+            jc = 2 * t1c * DJ / PI_R;
+            t2a = A / jc - t1c;
+            c1 = to_count(lsm_floor(t1c / dt + (lsm_real)0.5));
+        }
+    }
+    const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
+    const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
+    const uint32_t c2 = to_count(lsm_floor(t2c / dt + (lsm_real)0.5));
+    if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
+        return false;
+    return window_best(sz, dv_mm_s, c1, c2, iv);
+}
+
+bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
+                                 lsm_scurve_intervals *iv)
+{
+    if (!(dv_mm_s > 0)) {
+        iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
+        return true;
+    }
+    lsm_scurve_sizer sz;
+    lsm_scurve_sizer_init(&sz, lim, cycle_s);
+    return lsm_scurve_sizer_intervals(&sz, dv_mm_s, iv);
 }
 
 static void paper_intervals(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, lsm_scurve_intervals *iv,

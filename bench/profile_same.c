@@ -11,7 +11,7 @@
  *   short     1-axis moves with feeds whose distance is within a few ramps of the direct ramp's (the fallback)
  *   sync      2-6 axes from rest, some still (test_scurve_props.c's random_request)
  *   paper     1-3 axes, the paper's rounding rule
- * Prints the number of differences per family and the first few; exits 1 if any differ.
+ * Prints the number of differences per family and the first four of each; exits 1 if any differ.
  */
 #include <math.h>
 #include <stdio.h>
@@ -49,7 +49,7 @@ static long g_shown;
 static long g_same_cycles, g_fewer_cycles, g_more_cycles, g_status_changed;
 static void show(const char *fam, long c, const char *what)
 {
-    if (g_shown++ < 12)
+    if (g_shown++ < 4)
         printf("  %s case %ld: %s\n", fam, c, what);
 }
 
@@ -209,7 +209,7 @@ int main(int argc, char **argv)
         const long d = family_moves(fams[f], fams[f][0] == 's' && fams[f][1] == 'y' ? count / 4 : count);
         printf("%s: %ld differ (same cycles %ld, fewer %ld, more %ld, status %ld)\n", fams[f], d, g_same_cycles,
                g_fewer_cycles, g_more_cycles, g_status_changed);
-        g_same_cycles = g_fewer_cycles = g_more_cycles = g_status_changed = 0;
+        g_same_cycles = g_fewer_cycles = g_more_cycles = g_status_changed = g_shown = 0;
         total += d;
     }
     printf("total: %ld differ\n", total);

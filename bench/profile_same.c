@@ -199,8 +199,7 @@ int main(int argc, char **argv)
     if (!g_rng)
         g_rng = 1;
     long total = 0;
-    printf("profile_same (%s), seed %llu, %ld cases per family\n", LSM_REAL_IS_FLOAT ? "float" : "double", seed,
-           count);
+    printf("profile_same (%s), seed %llu, %ld cases per family\n", LSM_REAL_IS_FLOAT ? "float" : "double", seed, count);
     const long d0 = family_strict(count);
     printf("strict: %ld differ\n", d0);
     total += d0;

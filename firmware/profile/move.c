@@ -202,8 +202,8 @@ static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ram
  * The answer is the one just below the jump: step past the velocity capacity of lo's intervals until the totals
  * change (usually once).
  */
-static void last_intervals(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, peak_try *lo,
-                           const peak_try *hi, lsm_real D)
+static void last_intervals(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, peak_try *lo, const peak_try *hi,
+                           lsm_real D)
 {
     lsm_real past = PAST_CAPACITY;
     for (int k = 0; k < 6; k++) {
@@ -346,7 +346,8 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
                 break; /* the bracket is down to adjacent feeds */
         }
         const bool sized = try_peak(&sz, v0, v1, x, &m);
-        if (sized && ((kind == PEAK_ROOT_LO && same_totals(&m, &lo)) || (kind == PEAK_ROOT_HI && same_totals(&m, &hi)))) {
+        if (sized &&
+            ((kind == PEAK_ROOT_LO && same_totals(&m, &lo)) || (kind == PEAK_ROOT_HI && same_totals(&m, &hi)))) {
             ans = &m; /* the distance crosses D at this root, on this line */
             break;
         }

@@ -120,12 +120,12 @@ bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s,
 typedef struct lsm_scurve_sizer {
     lsm_scurve_limits lim;
     lsm_real cycle_s;
-    lsm_real t1_s;          /* min(pi J / (2 DJ), sqrt(pi A / (2 DJ))) (eqs 25, 26) */
-    lsm_real jc_mm_s3;      /* 2 t1 DJ / pi (eq 32) */
-    lsm_real t2a_s;         /* A / jc - t1 (eq 27) */
-    uint32_t c1_cycles;     /* t1 rounded to cycles */
-    lsm_real cbrt_skip_s3;  /* eq 29 cannot bind while pi dv / (4 DJ) stays above this (about t1³) */
-    lsm_real cbrt_x_per_dv; /* pi / (4 DJ), rounded down */
+    lsm_real t1_s;                            /* min(pi J / (2 DJ), sqrt(pi A / (2 DJ))) (eqs 25, 26) */
+    lsm_real jc_mm_s3;                        /* 2 t1 DJ / pi (eq 32) */
+    lsm_real t2a_s;                           /* A / jc - t1 (eq 27) */
+    uint32_t c1_cycles;                       /* t1 rounded to cycles */
+    lsm_real cbrt_skip_s3;                    /* eq 29 cannot bind while pi dv / (4 DJ) stays above this (about t1³) */
+    lsm_real cbrt_x_per_dv;                   /* pi / (4 DJ), rounded down */
     lsm_real kj_per_dv, ka_per_dv, ks_per_dv; /* the sizing's lower bounds of total cycles, per unit dv */
 } lsm_scurve_sizer;
 

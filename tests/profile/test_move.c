@@ -6,6 +6,9 @@
  * max(v0, v1) nor the coarse grid of cruise feeds fits; the exact shapes linger at a cruise feed close to an
  * end feed. Each must plan, keep every limit (analytic peaks of both ramps, the cruise under v_max), end
  * exactly on D with feed v1, and take no more cycles than an independent witness shape found by brute force.
+ *
+ * The peak search (test_peak_search_matches_bisection): from rest to rest, the move's ramps have the totals of the
+ * largest peak that a plain bisection finds.   test_move [cases]   (default 3000)
  */
 #include <setjmp.h>
 #include <stdarg.h>

@@ -501,8 +501,9 @@ static bool axis_still(const lsm_move_request *req, unsigned i)
  * Solves every axis's cruise feed for the shared shape (eq (1) of move.h) and widens the shape until every
  * axis fits its limits. When a ramp must widen, the cruise is shortened so that the reference axis (the
  * slowest) keeps its current cruise feed: the move does not get slower than it must. Fills mv on success.
+ * With `alone`, only the reference axis counts (the others are taken as still), as for one axis planned alone.
  */
-static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_move *mv)
+static lsm_status fit(const lsm_move_request *req, unsigned ref, bool alone, shape *sh, lsm_move *mv)
 {
     const lsm_real dt = req->cycle_s;
     for (int iter = 0; iter < FIT_MAX_ITER; iter++) {
@@ -521,7 +522,7 @@ static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_
             (lsm_fabs(req->distance_mm[ref]) - req->v0_mm_s[ref] * ta / 2 - req->v1_mm_s[ref] * td / 2) / denom;
         bool ok = true, widened = false;
         for (unsigned i = 0; i < req->n_axes && ok; i++) {
-            if (axis_still(req, i))
+            if (axis_still(req, i) || (alone && i != ref))
                 continue;
             const lsm_axis_limits *L = &req->lim[i];
             const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
@@ -579,7 +580,7 @@ static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_
             ax->dir = req->distance_mm[i] < 0 ? -1 : 1;
             ax->v0_mm_s = v0;
             ax->v1_mm_s = v1;
-            if (axis_still(req, i)) {
+            if (axis_still(req, i) || (alone && i != ref)) {
                 ax->vc_mm_s = ax->jp_acc_mm_s3 = ax->jp_dec_mm_s3 = 0;
                 continue;
             }
@@ -645,6 +646,7 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
 
     /* 1. each axis alone: its minimal-time shape, made exact */
     uint32_t slowest_cycles = 0;
+    unsigned moving = 0;
     shape shared = {{0, 0, 0}, {0, 0, 0}, 0};
     mv->slowest_axis = 0;
     for (unsigned i = 0; i < req->n_axes; i++) {
@@ -660,13 +662,10 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
         }
         if (st != LSM_OK)
             return st;
-        lsm_move_request one = *req;
-        for (unsigned k = 0; k < req->n_axes; k++)
-            if (k != i)
-                one.distance_mm[k] = one.v0_mm_s[k] = one.v1_mm_s[k] = 0;
-        st = fit(&one, i, &sh, mv);
+        st = fit(req, i, true, &sh, mv);
         if (st != LSM_OK)
             return st;
+        moving++;
         const uint32_t n = lsm_move_total_cycles(mv);
         if (n > slowest_cycles) {
             slowest_cycles = n;
@@ -674,8 +673,11 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
             mv->slowest_axis = (uint8_t)i;
         }
     }
-    /* 2. all axes on the slowest axis's intervals, each with its own vc and corrected J_P */
-    return fit(req, mv->slowest_axis, &shared, mv);
+    /* 2. all axes on the slowest axis's intervals, each with its own vc and corrected J_P; with one moving axis,
+     * its fit alone already is that (the still axes are filled the same) */
+    if (moving == 1)
+        return LSM_OK;
+    return fit(req, mv->slowest_axis, false, &shared, mv);
 }
 
 uint32_t lsm_move_total_cycles(const lsm_move *mv)

@@ -120,9 +120,9 @@ typedef struct total_bound {
 /* True if candidate (n1, n2) certainly takes more cycles than best_total (so it can neither win nor tie). */
 static bool cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
 {
-    const uint64_t q = 2ull * n1 + n2;
-    if (2 * q > best_total)
-        return true;
+    const uint32_t q = 2 * n1 + n2; /* < 2^30: n1, n2 <= LSM_MAX_INTERVAL_CYCLES + 2 (32-bit: no libgcc helper) */
+    if (q > best_total / 2)
+        return true; /* the total is at least 2 q (n4 >= 0) */
     /* room: the largest r that still ties (an integer: r > room means a longer total); the relative margin
      * absorbs the rounding of the products below */
     const lsm_real room = (lsm_real)(best_total - q) * (1 + LB_MARGIN);

@@ -11,7 +11,8 @@
  *   short     1-axis moves with feeds whose distance is within a few ramps of the direct ramp's (the fallback)
  *   sync      2-6 axes from rest, some still (test_scurve_props.c's random_request)
  *   paper     1-3 axes, the paper's rounding rule
- * Prints the number of differences per family and the first four of each; exits 1 if any differ.
+ * Prints the number of differences per family and the first four of each (argv[3]: how many); exits 1 if any
+ * differ.
  */
 #include <math.h>
 #include <stdio.h>
@@ -44,12 +45,48 @@ static double pick_cycle(void)
     return u01() < 0.2 ? logu(1e-5, 0.05) : k[(int)(u01() * 6) % 6];
 }
 
-static long g_shown;
+static long g_shown, g_show_max = 4; /* argv[3]: how many differences to print per family */
 /* differing moves by their total cycles against the reference's: same, fewer, more; and status changes */
 static long g_same_cycles, g_fewer_cycles, g_more_cycles, g_status_changed;
+/* differing single-axis moves whose ramps are those of a fully converged bisection of the peak: this tree's, the
+ * reference's, neither's */
+static long g_bis_new, g_bis_ref, g_bis_none;
+
+static bool iv_same(const lsm_scurve_intervals *a, const lsm_scurve_intervals *b)
+{
+    return a->n1_cycles == b->n1_cycles && a->n2_cycles == b->n2_cycles && a->n4_cycles == b->n4_cycles;
+}
+
+/* The ramps of the largest peak whose quantised ramps travel at most D: bisection to adjacent feeds. */
+static void bisect_ramps(const lsm_move_request *r, lsm_scurve_intervals *acc, lsm_scurve_intervals *dec)
+{
+    const lsm_axis_limits *L = &r->lim[0];
+    const lsm_scurve_limits sl = {L->a_max_mm_s2, L->j_max_mm_s3, L->snap_max_mm_s4};
+    const lsm_real v0 = r->v0_mm_s[0], v1 = r->v1_mm_s[0], dt = r->cycle_s,
+                   D = (lsm_real)fabs((double)r->distance_mm[0]);
+    lsm_real lo = v0 > v1 ? v0 : v1, hi = L->v_max_mm_s;
+    for (int i = -1; i < 400; i++) {
+        const lsm_real mid = i < 0 ? hi : lo + (hi - lo) / 2;
+        if (i >= 0 && !(mid > lo && mid < hi))
+            break;
+        lsm_scurve_strict_intervals(&sl, dt, (lsm_real)fabs((double)(mid - v0)), acc);
+        lsm_scurve_strict_intervals(&sl, dt, (lsm_real)fabs((double)(mid - v1)), dec);
+        const lsm_real d = ((v0 + mid) * (lsm_real)lsm_scurve_total_cycles(acc) +
+                            (mid + v1) * (lsm_real)lsm_scurve_total_cycles(dec)) *
+                           dt / 2;
+        if (d <= D)
+            lo = mid;
+        else
+            hi = mid;
+        if (i < 0 && lo == hi)
+            break;
+    }
+    lsm_scurve_strict_intervals(&sl, dt, (lsm_real)fabs((double)(lo - v0)), acc);
+    lsm_scurve_strict_intervals(&sl, dt, (lsm_real)fabs((double)(lo - v1)), dec);
+}
 static void show(const char *fam, long c, const char *what)
 {
-    if (g_shown++ < 4)
+    if (g_shown++ < g_show_max)
         printf("  %s case %ld: %s\n", fam, c, what);
 }
 
@@ -126,6 +163,16 @@ static bool same_move(const lsm_move_request *r, const char *fam, long c)
             g_fewer_cycles++;
         else
             g_more_cycles++;
+        if (r->n_axes == 1 && r->rule == LSM_SCURVE_RULE_STRICT) {
+            lsm_scurve_intervals acc, dec;
+            bisect_ramps(r, &acc, &dec);
+            if (iv_same(&a.acc, &acc) && iv_same(&a.dec, &dec))
+                g_bis_new++;
+            else if (iv_same(&b.acc, &acc) && iv_same(&b.dec, &dec))
+                g_bis_ref++;
+            else
+                g_bis_none++;
+        }
     }
     char s[400];
     snprintf(s, sizeof s,
@@ -195,6 +242,8 @@ int main(int argc, char **argv)
 {
     const long count = argc > 1 ? atol(argv[1]) : 100000;
     const unsigned long long seed = argc > 2 ? strtoull(argv[2], NULL, 0) : 1;
+    if (argc > 3)
+        g_show_max = atol(argv[3]);
     g_rng = 0x9E3779B97F4A7C15ull ^ (seed * 0xD1B54A32D192ED03ull);
     if (!g_rng)
         g_rng = 1;
@@ -206,9 +255,13 @@ int main(int argc, char **argv)
     static const char *const fams[] = {"r2r", "feeds", "short", "sync", "paper"};
     for (unsigned f = 0; f < sizeof fams / sizeof fams[0]; f++) {
         const long d = family_moves(fams[f], fams[f][0] == 's' && fams[f][1] == 'y' ? count / 4 : count);
-        printf("%s: %ld differ (same cycles %ld, fewer %ld, more %ld, status %ld)\n", fams[f], d, g_same_cycles,
-               g_fewer_cycles, g_more_cycles, g_status_changed);
+        printf("%s: %ld differ (same cycles %ld, fewer %ld, more %ld, status %ld; single axis, the ramps of a "
+               "converged "
+               "bisection: this tree %ld, reference %ld, neither %ld)\n",
+               fams[f], d, g_same_cycles, g_fewer_cycles, g_more_cycles, g_status_changed, g_bis_new, g_bis_ref,
+               g_bis_none);
         g_same_cycles = g_fewer_cycles = g_more_cycles = g_status_changed = g_shown = 0;
+        g_bis_new = g_bis_ref = g_bis_none = 0;
         total += d;
     }
     printf("total: %ld differ\n", total);

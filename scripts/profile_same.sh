@@ -2,7 +2,8 @@
 # Bit-for-bit comparison of this tree's interval sizing and move planning (firmware/profile/scurve.c, move.c)
 # with those of a reference revision, on a large seeded random set (bench/profile_same.c). For refactors of the
 # planning speed: a plan that changes is printed with its inputs.
-#   scripts/profile_same.sh REF [COUNT [SEED]]     e.g. scripts/profile_same.sh main 200000
+#   scripts/profile_same.sh REF [COUNT [SEED [SHOW]]]     e.g. scripts/profile_same.sh main 200000
+# SHOW: how many differing cases to print per family (default 4).
 # LSM_BENCH_FLOAT=1 compares the float builds. Both sides are compiled here with the host build's flags.
 set -euo pipefail
 cd "$(dirname "$0")/.."

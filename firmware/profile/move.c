@@ -195,6 +195,15 @@ static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ram
 /* Relative step past a ramp's velocity capacity that leaves it for sure (a few ulp of the feed). */
 #define PAST_CAPACITY (8 * LSM_REAL_EPS)
 
+/* The peak just past the velocity capacity of lo's intervals (by a relative `past`): where the first of lo's two
+ * ramps must change its intervals (no larger velocity change fits them; the sizing then takes others). */
+static lsm_real past_capacity(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, const peak_try *lo, lsm_real past)
+{
+    const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.acc),
+                                  v1 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.dec));
+    return lsm_max2(cap, lo->v) * (1 + past);
+}
+
 /*
  * lo and hi are on adjacent lines and every feasible peak between them has lo's totals. Several intervals can
  * share those totals (n1, n2 and n4 traded against each other); the sizing takes the one with the larger eq-34
@@ -207,9 +216,7 @@ static void last_intervals(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1,
 {
     lsm_real past = PAST_CAPACITY;
     for (int k = 0; k < 6; k++) {
-        const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.acc),
-                                      v1 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.dec));
-        const lsm_real x = lsm_max2(cap, lo->v) * (1 + past);
+        const lsm_real x = past_capacity(sz, v0, v1, lo, past);
         peak_try m;
         if (!(x > lo->v && x < hi->v) || !try_peak(sz, v0, v1, x, &m))
             return;
@@ -225,18 +232,28 @@ typedef enum peak_kind { PEAK_ROOT_LO, PEAK_ROOT_HI, PEAK_VMAX, PEAK_INNER } pea
 
 /* False position's share of the bracket kept clear at either end (the inner step never lands on an end). */
 #define PEAK_INNER_MIN LSM_R(0.05)
+/* Ramp totals (summed over both ramps) within which lo and hi are near: a few transitions apart. */
+#define PEAK_NEAR 4u
 
 /*
- * The inner step: false position on the distance between lo and hi (half way if hi overflowed), within the part of
- * the bracket that the two roots leave open ([max(lo, root(hi)), min(hi, root(lo))]).
+ * The inner step, inside the bracket:
+ *   - lo and hi near (PEAK_NEAR): just past the velocity capacity of lo's intervals, the next transition up (one
+ *     ramp changes its intervals there; false position would fall on hi's side of a small middle line);
+ *   - hi overflowed, or the last two inner steps moved the same end (false position creeping): half way;
+ *   - otherwise false position on the distance, within [max(lo, root(hi)), min(hi, root(lo))], clear of its ends.
  */
-static lsm_real inner_peak(const peak_try *lo, const peak_try *hi, bool hi_sized, lsm_real rl, lsm_real rh, lsm_real D)
+static lsm_real inner_peak(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, const peak_try *lo, const peak_try *hi,
+                           bool hi_sized, bool creeping, lsm_real rl, lsm_real rh, lsm_real D)
 {
+    if (hi_sized && (hi->ta - lo->ta) + (hi->td - lo->td) <= PEAK_NEAR) {
+        const lsm_real x = past_capacity(sz, v0, v1, lo, PAST_CAPACITY);
+        if (x > lo->v && x < hi->v)
+            return x;
+    }
+    if (!hi_sized || creeping || !(hi->d > lo->d))
+        return lo->v + (hi->v - lo->v) / 2;
     const lsm_real a = lsm_max2(lo->v, rh), b = lsm_min2(hi->v, rl);
-    lsm_real f = LSM_R(0.5);
-    if (hi_sized && hi->d > lo->d)
-        f = (D - lo->d) / (hi->d - lo->d);
-    const lsm_real x = lo->v + (hi->v - lo->v) * f;
+    const lsm_real x = lo->v + (hi->v - lo->v) * ((D - lo->d) / (hi->d - lo->d));
     const lsm_real w = (b - a) * PEAK_INNER_MIN;
     return b > a ? lsm_min2(lsm_max2(x, a + w), b - w) : lo->v + (hi->v - lo->v) / 2;
 }
@@ -299,6 +316,7 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
     bool hi_tried = false, hi_sized = false; /* hi: an infeasible try (sized: not an overflow) */
     bool root_next = false;                  /* the last try was an inner one: try its root next */
     bool last_lo = true;                     /* ... and it became lo (else hi); lo is the first try */
+    int inner_side[2] = {0, 0};              /* the ends the last two inner steps moved: -1 lo, +1 hi */
     const peak_try *ans = &lo;
     for (int i = 0; i < PEAK_TRIES; i++) {
         const lsm_real rl = peak_root(&lo, d2_dt, v0, v1);
@@ -340,7 +358,8 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
             x = rh;
             kind = PEAK_ROOT_HI;
         } else {
-            x = inner_peak(&lo, &hi, hi_sized, rl, rh, D);
+            x = inner_peak(&sz, v0, v1, &lo, &hi, hi_sized, inner_side[0] != 0 && inner_side[0] == inner_side[1], rl,
+                           rh, D);
             kind = PEAK_INNER;
             if (!(x > lo.v && x < hi.v))
                 break; /* the bracket is down to adjacent feeds */
@@ -353,6 +372,10 @@ static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_r
         }
         root_next = kind == PEAK_INNER || kind == PEAK_VMAX;
         last_lo = sized && m.d <= D;
+        if (kind == PEAK_INNER) {
+            inner_side[1] = inner_side[0];
+            inner_side[0] = last_lo ? -1 : 1;
+        }
         if (last_lo) {
             lo = m;
             if (kind == PEAK_VMAX)

@@ -193,7 +193,7 @@ static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ram
 }
 
 /* Relative step past a ramp's velocity capacity that leaves it for sure (a few ulp of the feed). */
-#define PAST_CAPACITY (8 * LSM_REAL_EPS)
+#define PAST_CAPACITY (2 * LSM_REAL_EPS)
 
 /* The peak just past the velocity capacity of lo's intervals (by a relative `past`): where the first of lo's two
  * ramps must change its intervals (no larger velocity change fits them; the sizing then takes others). */

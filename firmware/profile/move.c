@@ -192,7 +192,8 @@ static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ram
     return one_ramp ? da == 1 : da + dd == 1;
 }
 
-/* Relative step past a ramp's velocity capacity that leaves it for sure (a few ulp of the feed). */
+/* Relative step past a ramp's velocity capacity (2 ulp of the feed: float slivers where another interval set of
+ * the same totals holds are a few ulp wide; last_intervals steps further while the sizing keeps the intervals). */
 #define PAST_CAPACITY (2 * LSM_REAL_EPS)
 
 /* The peak just past the velocity capacity of lo's intervals (by a relative `past`): where the first of lo's two

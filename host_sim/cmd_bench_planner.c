@@ -362,8 +362,8 @@ int cmd_bench_planner(int argc, char **argv)
     printf(
         "\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
         "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n"
-        "vpop-c: VPOp held to its jerk limits continuously (its jerk limits scaled by `scale`, the largest factor for "
-        "which its own continuous axis jerk, eq 3 at and halfway between its samples, stays <= J); ratio = lissom / "
-        "vpop-c.\n");
+        "vpop-c: VPOp held to its jerk limits continuously (its jerk limits scaled, by one factor for the whole path, "
+        "then raised bin by bin where its motion has slack, so that its own continuous axis jerk, eq 3 at and halfway "
+        "between its samples, stays <= J; `scale`: the smallest factor); ratio = lissom / vpop-c.\n");
     return 0;
 }

@@ -76,7 +76,8 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
     json_num(f, r->max_dev_mm);
     fprintf(f, ",\n  \"end_error\": ");
     json_num(f, r->end_error);
-    fprintf(f, ",\n  \"program_blocks\": %zu,\n  \"program_length_mm\": ", r->prog_blocks);
+    fprintf(f, ",\n  \"program_blocks\": %zu,\n  \"program_held_max\": %zu,\n  \"program_length_mm\": ", r->prog_blocks,
+            r->prog_held_max);
     json_num(f, r->prog_length_mm);
     static const char *keys[3] = {"max_axis_velocity", "max_axis_acceleration", "max_axis_jerk"};
     for (int kind = 0; kind < 3; kind++) {
@@ -287,15 +288,18 @@ int cmd_run(int argc, char **argv)
         fprintf(stderr, "error: %s\n", err);
         return 1;
     }
+    /* --no-csv with the Lissom planner: the program is read in chunks as it runs (constant memory, pathrun.h) */
+    const bool stream = no_csv && o.planner == SIM_RUN_LISSOM;
     size_t len = 0;
-    char *text = sim_read_file(program, &len);
-    if (!text) {
+    char *text = stream ? NULL : sim_read_file(program, &len);
+    if (!stream && !text) {
         fprintf(stderr, "error: cannot read %s\n", program);
         return 1;
     }
     o.machine = &m;
     o.text = text;
     o.len = len;
+    o.path = program;
     o.capacity = (uint32_t)capacity;
     o.drives = !no_drive;
     o.summary_only = no_csv; /* constant memory: nothing is kept for CSVs */

@@ -27,12 +27,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "arc_centre.h"
 #include "cli.h"
 #include "commands.h"
 #include "corner.h"
 #include "gcode.h"
 #include "geom.h"
+#include "simprog.h"
 
 typedef struct {
     lsm_geom g;
@@ -141,53 +141,6 @@ static void sm_eval(const lsm_geom *g, double s, double pos[LSM_MAX_AXES], doubl
 }
 
 
-static double sm_dist_block(const lsm_geom *g, const double p[3])
-{
-    double q[LSM_MAX_AXES];
-    if (g->kind == LSM_GEOM_LINE) {
-        const lsm_geom_line *l = &g->u.line;
-        double t = 0.0;
-        for (int i = 0; i < 3; i++)
-            t += (p[i] - l->p0[i]) * l->dir[i];
-        if (t < 0.0)
-            t = 0.0;
-        if (t > g->len)
-            t = g->len;
-        double d2 = 0.0;
-        for (int i = 0; i < 3; i++) {
-            const double e = p[i] - l->p0[i] - l->dir[i] * t;
-            d2 += e * e;
-        }
-        return sqrt(d2);
-    }
-    const lsm_geom_arc *a = &g->u.arc;
-    double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
-                   a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
-    double u = 0.0, v = 0.0, h = 0.0, ac[3];
-    sim_arc_centre_d(a, ac);
-    for (int i = 0; i < 3; i++) {
-        const double w = p[i] - ac[i];
-        u += w * a->e1[i];
-        v += w * a->e2[i];
-        h += w * n[i];
-    }
-    const double rho = hypot(u, v);
-    const double two_pi = 2.0 * LSM_PI;
-    double rel = a->sweep_rad > 0 ? atan2(v, u) - a->phi0_rad : a->phi0_rad - atan2(v, u);
-    rel -= two_pi * floor(rel / two_pi);
-    if (fabs(a->sweep_rad) >= two_pi || rel <= fabs(a->sweep_rad))
-        return hypot(rho - a->radius_mm, h);
-    double best = HUGE_VAL;
-    for (int e = 0; e < 2; e++) {
-        sm_eval(g, e ? g->len : 0.0, q, NULL, NULL);
-        const double d =
-            sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
-        if (d < best)
-            best = d;
-    }
-    return best;
-}
-
 typedef struct {
     const lsm_corner_result *r;
     const lsm_geom *b1, *b2;
@@ -209,7 +162,7 @@ static double sm_f(const sm_check *c, int which, double t)
             d2 += (p[i] - c->v[i]) * (p[i] - c->v[i]);
         return -d2;
     }
-    const double a = sm_dist_block(c->b1, p), b = sm_dist_block(c->b2, p);
+    const double a = sim_prog_distance(c->b1, p), b = sim_prog_distance(c->b2, p);
     return a < b ? a : b;
 }
 

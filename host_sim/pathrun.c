@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "arc_centre.h"
+#include "simprog.h"
 #include "drive.h"
 #include "gcode.h"
 #include "geom.h"
@@ -67,252 +68,6 @@ void sim_run_planner_config(const sim_machine *m, lsm_planner_config *cfg)
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
-/* the program: parsed blocks and the programmed path                                                          */
-
-typedef struct pblk {
-    lsm_gcode_block b;
-    double tol_mm;
-} pblk;
-
-typedef struct prog {
-    pblk *v;
-    size_t n, cap;
-    sim_run_mfunc *ev; /* machine functions (gcode.h events) */
-    size_t n_ev, cap_ev;
-    size_t n_errors;
-    lsm_geom *path;  /* the programmed path (X Y Z part of every block) */
-    double *s0;      /* cumulative length at the start of each path element */
-    uint32_t *pline; /* source line of each path element */
-    size_t np;
-    double end[LSM_MAX_AXES];
-    double length;
-} prog;
-
-static void prog_free(prog *p)
-{
-    free(p->v);
-    free(p->ev);
-    free(p->path);
-    free(p->s0);
-    free(p->pline);
-    memset(p, 0, sizeof *p);
-}
-
-/* Keeps a line's machine functions; one that needs an exact stop makes the block before it end with one. The end of
- * the program (M2/M30) is the planner's own final stop. */
-static int prog_events(prog *p, const lsm_gcode_result *res)
-{
-    for (int k = 0; k < res->n_events; k++) {
-        if (p->n_ev == p->cap_ev) {
-            p->cap_ev = p->cap_ev ? 2 * p->cap_ev : 64;
-            sim_run_mfunc *nv = realloc(p->ev, p->cap_ev * sizeof *nv);
-            if (!nv)
-                return -1;
-            p->ev = nv;
-        }
-        const lsm_gcode_event *e = &res->events[k];
-        const size_t before = p->n - res->n_blocks + e->at_block; /* (the line's blocks are in p->v already) */
-        p->ev[p->n_ev++] = (sim_run_mfunc){*e, before, -1.0};
-        if (e->exact_stop && e->kind != LSM_GCODE_EV_END && before > 0 && before <= p->n)
-            p->v[before - 1].tol_mm = 0;
-    }
-    return 0;
-}
-
-static int prog_load(const sim_run_opts *o, prog *p, char *err, size_t errlen)
-{
-    memset(p, 0, sizeof *p);
-    lsm_gcode_options go;
-    lsm_gcode_default_options(&go);
-    go.axis_mask = o->machine->axis_mask;
-    lsm_gcode g;
-    if (lsm_gcode_init(&g, &go) != LSM_OK) {
-        snprintf(err, errlen, "G-code parser init failed");
-        return -1;
-    }
-    size_t at = 0;
-    lsm_gcode_result res;
-    for (;;) {
-        size_t used = 0;
-        lsm_status st;
-        bool fin = at >= o->len;
-        if (!fin)
-            st = lsm_gcode_feed(&g, o->text + at, o->len - at, &used, &res);
-        else
-            st = lsm_gcode_finish(&g, &res);
-        at += used;
-        if (res.complete) {
-            if (st != LSM_OK) { /* report the first, read on: every refused line is counted */
-                if (p->n_errors++ == 0) {
-                    char why[128];
-                    snprintf(err, errlen, "G-code line %u column %u: %s", (unsigned)res.err.line,
-                             (unsigned)res.err.column, lsm_gcode_error_text(&res.err, why, sizeof why));
-                }
-                if (fin)
-                    break;
-                continue;
-            }
-            for (int k = 0; k < res.n_blocks; k++) {
-                if (p->n == p->cap) {
-                    p->cap = p->cap ? 2 * p->cap : 256;
-                    pblk *nv = realloc(p->v, p->cap * sizeof *nv);
-                    if (!nv) {
-                        snprintf(err, errlen, "out of memory");
-                        return -1;
-                    }
-                    p->v = nv;
-                }
-                pblk *q = &p->v[p->n++];
-                q->b = res.blocks[k];
-                if (res.modal.blend == LSM_GCODE_EXACT_STOP)
-                    q->tol_mm = 0;
-                else
-                    q->tol_mm = res.modal.blend_tol_mm > 0 ? res.modal.blend_tol_mm : o->machine->blend_tol_mm;
-            }
-            if (prog_events(p, &res) != 0) {
-                snprintf(err, errlen, "out of memory");
-                return -1;
-            }
-            if (res.end_of_program)
-                break;
-        }
-        if (fin)
-            break;
-    }
-    if (p->n_errors > 1) {
-        const size_t used = strlen(err);
-        snprintf(err + used, errlen - used, " (and %zu more: lissom-sim check lists them)", p->n_errors - 1);
-    }
-    if (p->n_errors)
-        return -1;
-    const lsm_real *pos = lsm_gcode_position(&g);
-    for (int i = 0; i < LSM_MAX_AXES; i++)
-        p->end[i] = pos[i];
-    /* the programmed path */
-    p->path = calloc(p->n ? p->n : 1, sizeof *p->path);
-    p->s0 = calloc(p->n + 1, sizeof *p->s0);
-    p->pline = calloc(p->n + 1, sizeof *p->pline);
-    if (!p->path || !p->s0 || !p->pline) {
-        snprintf(err, errlen, "out of memory");
-        return -1;
-    }
-    double s = 0;
-    for (size_t i = 0; i < p->n; i++) {
-        const lsm_gcode_block *b = &p->v[i].b;
-        lsm_geom gg;
-        lsm_status st;
-        if (b->type == LSM_GCODE_BLOCK_ARC) {
-            st = lsm_geom_arc_init(&gg, b->start, b->end, b->centre, (lsm_geom_plane)b->plane, b->dir, b->turns);
-        } else {
-            lsm_real a[LSM_MAX_AXES], e[LSM_MAX_AXES];
-            for (int k = 0; k < LSM_MAX_AXES; k++) {
-                a[k] = k < 3 ? b->start[k] : 0;
-                e[k] = k < 3 ? b->end[k] : 0;
-            }
-            st = lsm_geom_line_init(&gg, a, e);
-        }
-        if (st != LSM_OK)
-            continue; /* e.g. a rotary-only move: no X Y Z path */
-        p->path[p->np] = gg;
-        p->s0[p->np] = s;
-        p->pline[p->np] = b->line;
-        s += gg.len;
-        p->np++;
-    }
-    p->s0[p->np] = s;
-    p->length = s;
-    return 0;
-}
-
-
-/* Distance (X Y Z) from x to one path element. */
-static double dist_elem(const lsm_geom *g, const double x[3])
-{
-    if (g->kind == LSM_GEOM_LINE) {
-        const lsm_real *p0 = g->u.line.p0, *d = g->u.line.dir;
-        double t = (x[0] - p0[0]) * d[0] + (x[1] - p0[1]) * d[1] + (x[2] - p0[2]) * d[2];
-        if (t < 0)
-            t = 0;
-        if (t > g->len)
-            t = g->len;
-        double r = 0;
-        for (int i = 0; i < 3; i++) {
-            const double e = x[i] - (p0[i] + d[i] * t);
-            r += e * e;
-        }
-        return sqrt(r);
-    }
-    const lsm_geom_arc *a = &g->u.arc;
-    double n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
-                   a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
-    double ac[3];
-    sim_arc_centre_d(a, ac);
-    double d[3] = {x[0] - ac[0], x[1] - ac[1], x[2] - ac[2]};
-    const double u = d[0] * a->e1[0] + d[1] * a->e1[1] + d[2] * a->e1[2];
-    const double w = d[0] * a->e2[0] + d[1] * a->e2[1] + d[2] * a->e2[2];
-    const double phi = atan2(w, u);
-    const double sg = a->sweep_rad < 0 ? -1.0 : 1.0, sw = fabs(a->sweep_rad);
-    double rel = fmod(sg * (phi - a->phi0_rad), 2 * LSM_PI);
-    if (rel < 0)
-        rel += 2 * LSM_PI;
-    double best = INFINITY;
-    for (double t = rel; t <= sw + 1e-12; t += 2 * LSM_PI) {
-        const double ph = a->phi0_rad + sg * t, f = t / sw;
-        double q[3];
-        for (int i = 0; i < 3; i++)
-            q[i] = ac[i] + a->radius_mm * (cos(ph) * a->e1[i] + sin(ph) * a->e2[i]) + n[i] * a->axial_mm * f;
-        const double r =
-            sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
-        if (r < best)
-            best = r;
-    }
-    lsm_real e0[LSM_MAX_AXES] = {0}, e1[LSM_MAX_AXES] = {0};
-    lsm_geom_eval(g, 0, e0, NULL, NULL);
-    lsm_geom_eval(g, g->len, e1, NULL, NULL);
-    for (int k = 0; k < 2; k++) {
-        const lsm_real *q = k ? e1 : e0;
-        const double r =
-            sqrt((x[0] - q[0]) * (x[0] - q[0]) + (x[1] - q[1]) * (x[1] - q[1]) + (x[2] - q[2]) * (x[2] - q[2]));
-        if (r < best)
-            best = r;
-    }
-    return best;
-}
-
-/* Distance from x to the programmed path near the element of source line `line` (the block the setpoint belongs
- * to): every element whose span lies within reach_mm of that element's span. */
-static double dev_of(const prog *p, const double x[3], uint32_t line, double reach_mm)
-{
-    if (p->np == 0)
-        return 0;
-    /* the last element whose line is <= line */
-    size_t lo = 0, hi = p->np;
-    while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (p->pline[mid] <= line)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    const size_t e = lo;
-    /* a fitted arc carries the line of its last point, and corner transitions the line of the next block: look back
-     * over two whole runs (LSM_ARCFIT_MAX points each) */
-    const double s_lo = p->s0[e] - reach_mm, s_hi = p->s0[e + 1] + reach_mm;
-    size_t a = e, b = e;
-    while (a > 0 && (p->s0[a] > s_lo || e - a < 2 * LSM_ARCFIT_MAX + 4))
-        a--;
-    while (b + 1 < p->np && p->s0[b + 1] < s_hi)
-        b++;
-    double best = INFINITY;
-    for (size_t i = a; i <= b; i++) {
-        const double d = dist_elem(&p->path[i], x);
-        if (d < best)
-            best = d;
-    }
-    return best;
-}
-
-/* ---------------------------------------------------------------------------------------------------------- */
 
 static double now_ns(void)
 {
@@ -327,7 +82,7 @@ static double now_ns(void)
  * a run without CSVs (summary_only) measures while it runs and keeps no setpoint; a run that keeps them measures
  * them afterwards with the same code, so both give the same numbers. */
 typedef struct meter {
-    const prog *p;
+    const sim_prog *p;
     const sim_machine *m;
     sim_run_result *r;
     double dt, reach;
@@ -337,9 +92,11 @@ typedef struct meter {
     bool drives; /* step the drives here (summary_only) */
     sim_drive drv[SIM_MACHINE_MAX_AXES];
     double dq1[LSM_MAX_AXES], dq2[LSM_MAX_AXES]; /* the drives' own history (at rest on the start) */
+    size_t elem_lo;       /* the first path element the last deviation looked at (sim_prog_deviation) */
+    size_t window_misses; /* deviations whose path elements were no longer held (a windowed program) */
 } meter;
 
-static void meter_init(meter *mt, const prog *p, const sim_machine *m, sim_run_result *r, bool drives)
+static void meter_init(meter *mt, const sim_prog *p, const sim_machine *m, sim_run_result *r, bool drives)
 {
     memset(mt, 0, sizeof *mt);
     mt->p = p;
@@ -383,7 +140,7 @@ static void meter_drives(meter *mt, const double q[LSM_MAX_AXES])
         const int a = m->axes[i].index;
         if (mt->n == 0) { /* validated before the run (sim_run_program) */
             (void)sim_drive_init(&mt->drv[i], &m->axes[i].drive, dt, q[a]);
-            mt->dq1[a] = mt->dq2[a] = mt->p->n ? mt->p->v[0].b.start[a] : q[a];
+            mt->dq1[a] = mt->dq2[a] = mt->p->total ? mt->p->start[a] : q[a];
         }
         const double q0 = q[a], q1 = mt->dq1[a], q2 = mt->dq2[a];
         const double v = (q0 - q1) / dt, acc = (q0 - 2 * q1 + q2) / (dt * dt);
@@ -397,16 +154,16 @@ static void meter_drives(meter *mt, const double q[LSM_MAX_AXES])
     }
 }
 
-static double dev_of(const prog *p, const double x[3], uint32_t line, double reach_mm);
-
 static void meter_push(meter *mt, const double q[LSM_MAX_AXES], uint32_t line)
 {
     for (int a = 0; a < LSM_MAX_AXES; a++) {
         if (mt->n == 0) /* at rest on the program's start before the first setpoint */
-            mt->q1[a] = mt->q2[a] = mt->q3[a] = mt->p->n ? mt->p->v[0].b.start[a] : q[a];
+            mt->q1[a] = mt->q2[a] = mt->q3[a] = mt->p->total ? mt->p->start[a] : q[a];
         meter_diff(mt, a, q[a]);
     }
-    const double d = dev_of(mt->p, q, line, mt->reach);
+    const double d = sim_prog_deviation(mt->p, q, line, mt->reach, &mt->elem_lo);
+    if (d < 0)
+        mt->window_misses++;
     if (d > mt->r->max_dev_mm) {
         mt->r->max_dev_mm = d;
         if (getenv("LSM_DEV_DEBUG"))
@@ -476,7 +233,7 @@ static int rec_push(rec *r, const double pos[LSM_MAX_AXES], double feed, uint32_
 /* A run that neither moves nor takes a block for this long (machine time, s) has stalled. */
 #define SIM_STALL_S 10.0
 
-static lsm_status append_block(lsm_planner *pl, const pblk *q)
+static lsm_status append_block(lsm_planner *pl, const sim_prog_block *q)
 {
     const lsm_gcode_block *b = &q->b;
     lsm_planner_move mv;
@@ -504,21 +261,22 @@ typedef struct mf_gate {
 } mf_gate;
 
 /* True when the machine rests on the programmed end of the blocks before `next`. */
-static bool mf_at_rest(const prog *p, size_t next, const lsm_interp *ip)
+static bool mf_at_rest(const sim_prog *p, size_t next, const lsm_interp *ip)
 {
     if (lsm_interp_state_of(ip) != LSM_INTERP_IDLE)
         return false;
-    const lsm_real *want = next > 0 ? p->v[next - 1].b.end : p->v[0].b.start;
-    for (int k = 0; k < LSM_MAX_AXES; k++)
-        if (fabs(ip->pos[k] - want[k]) > 1e-6)
+    for (int k = 0; k < LSM_MAX_AXES; k++) {
+        const double want = next > 0 ? (double)sim_prog_block_at(p, next - 1)->b.end[k] : p->start[k];
+        if (fabs(ip->pos[k] - want) > 1e-6)
             return false;
+    }
     return true;
 }
 
 /* Runs the machine functions due before block `next` at cycle k: those without a stop at once; for one with a stop,
  * the stream waits (the planner is flushed) until the machine rests on the end of the block before it; a dwell then
  * holds the stream for its whole cycles. Returns true while the stream must wait. */
-static bool mf_step(const prog *p, mf_gate *g, size_t next, lsm_planner *pl, const lsm_interp *ip, uint64_t k,
+static bool mf_step(const sim_prog *p, mf_gate *g, size_t next, lsm_planner *pl, const lsm_interp *ip, uint64_t k,
                     double cycle_s)
 {
     if (k < g->dwell_until)
@@ -527,7 +285,7 @@ static bool mf_step(const prog *p, mf_gate *g, size_t next, lsm_planner *pl, con
         sim_run_mfunc *m = &p->ev[g->i];
         if (m->ev.kind == LSM_GCODE_EV_END)
             return false; /* the planner's finish is the end's stop; its time is set after the run */
-        if (m->ev.exact_stop && p->n > 0) {
+        if (m->ev.exact_stop && p->total > 0) {
             if (!g->flushed) {
                 if (lsm_planner_flush(pl) != LSM_OK)
                     return true;
@@ -548,7 +306,54 @@ static bool mf_step(const prog *p, mf_gate *g, size_t next, lsm_planner *pl, con
     return false;
 }
 
-static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
+typedef struct feed_state {
+    size_t next;     /* the next program block to append */
+    size_t appended; /* blocks appended */
+    bool fin;        /* the planner was told the program ended */
+    mf_gate gate;
+    double t_append; /* host time in appends (ns) */
+} feed_state;
+
+/* Stage 1 of a cycle: the machine functions due, then blocks into the planner while it has room. A windowed
+ * program is parsed one block ahead of the append, so that a machine function after a block is known (and its
+ * exact stop set) before the block goes in, as when the whole program is loaded first. Returns 0, or -1 with
+ * r->err set. */
+static int feed_stage(const sim_run_opts *o, sim_prog *p, feed_state *fs, lsm_planner *pl, const lsm_interp *ip,
+                      uint64_t k, sim_run_result *r)
+{
+    const bool slow = o->feed_every > 0;
+    const double cycle_s = pl->cfg.cycle_s;
+    if (sim_prog_need(p, fs->next + 1, r->err, sizeof r->err) != 0)
+        return -1;
+    bool wait = mf_step(p, &fs->gate, fs->next, pl, ip, k, cycle_s);
+    while (!wait && fs->next < p->n && lsm_planner_free(pl) >= 3 && (!slow || k % o->feed_every == 0)) {
+        const sim_prog_block *q = sim_prog_block_at(p, fs->next);
+        const double t0 = now_ns();
+        const lsm_status st = append_block(pl, q);
+        fs->t_append += now_ns() - t0;
+        if (st == LSM_E_FULL) /* the planner holds points for fitting: run the machine and retry */
+            break;
+        if (st != LSM_OK && st != LSM_E_ZERO_LENGTH) {
+            snprintf(r->err, sizeof r->err, "G-code line %u: planner: %s", (unsigned)q->b.line, lsm_status_str(st));
+            return -1;
+        }
+        fs->next++; /* LSM_E_ZERO_LENGTH: too short to represent, dropped (the parser dropped exact zeros) */
+        if (sim_prog_need(p, fs->next + 1, r->err, sizeof r->err) != 0)
+            return -1;
+        if (st == LSM_E_ZERO_LENGTH)
+            continue;
+        fs->appended++;
+        wait = fs->gate.i < p->n_ev && p->ev[fs->gate.i].before_block <= fs->next &&
+               p->ev[fs->gate.i].ev.kind != LSM_GCODE_EV_END; /* run it on the next cycle */
+        if (slow)
+            break;
+    }
+    if (!wait && fs->next == p->n && p->done && lsm_planner_finish(pl) == LSM_OK)
+        fs->fin = true;
+    return 0;
+}
+
+static int run_lissom(const sim_run_opts *o, sim_prog *p, rec *out, sim_run_result *r)
 {
     lsm_planner_config cfg;
     if (o->cfg_override)
@@ -572,8 +377,8 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
         return -1;
     }
     lsm_real start[LSM_MAX_AXES] = {0};
-    if (p->n)
-        memcpy(start, p->v[0].b.start, sizeof start);
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        start[i] = (lsm_real)p->start[i];
     lsm_status st = lsm_planner_init(pl, &cfg, store, cap, start);
     if (st != LSM_OK) {
         snprintf(r->err, sizeof r->err, "planner init: %s", lsm_status_str(st));
@@ -583,8 +388,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
         return -1;
     }
     lsm_interp_init(ip, pl);
-    size_t next = 0, appended = 0;
-    bool fin = false;
+    feed_state fs = {0};
     /* no cap on machine time unless asked for (long jobs run for hours); a stall ends the run instead */
     const double max_t = o->max_time_s;
     const uint64_t max_cycles = max_t > 0 ? (uint64_t)(max_t / cfg.cycle_s) + 1 : UINT64_MAX;
@@ -592,41 +396,15 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
     uint64_t still = 0;              /* cycles without progress */
     lsm_real last_pos[LSM_MAX_AXES]; /* the setpoints' own type (float on the host-float build) */
     memcpy(last_pos, start, sizeof last_pos);
-    double t_append = 0, t_step = 0, t_prep = 0;
+    double t_step = 0, t_prep = 0;
     size_t ev = 0;
     int rc = 0;
     uint64_t k_done = 0;
-    mf_gate gate = {0};
     for (uint64_t k = 0;; k++) {
-        const size_t next_before = next;
-        if (!fin) {
-            const bool slow = o->feed_every > 0;
-            bool wait = mf_step(p, &gate, next, pl, ip, k, cfg.cycle_s);
-            while (!wait && next < p->n && lsm_planner_free(pl) >= 3 && (!slow || k % o->feed_every == 0)) {
-                const double t0 = now_ns();
-                st = append_block(pl, &p->v[next]);
-                t_append += now_ns() - t0;
-                if (st == LSM_E_ZERO_LENGTH) { /* too short to represent: dropped (the parser dropped exact zeros) */
-                    next++;
-                    continue;
-                }
-                if (st == LSM_E_FULL) /* the planner holds points for fitting: run the machine and retry */
-                    break;
-                if (st != LSM_OK) {
-                    snprintf(r->err, sizeof r->err, "G-code line %u: planner: %s", (unsigned)p->v[next].b.line,
-                             lsm_status_str(st));
-                    rc = -1;
-                    goto done;
-                }
-                next++;
-                appended++;
-                wait = gate.i < p->n_ev && p->ev[gate.i].before_block <= next &&
-                       p->ev[gate.i].ev.kind != LSM_GCODE_EV_END; /* run it on the next cycle */
-                if (slow)
-                    break;
-            }
-            if (!wait && next == p->n && lsm_planner_finish(pl) == LSM_OK)
-                fin = true;
+        const size_t next_before = fs.next;
+        if (!fs.fin && feed_stage(o, p, &fs, pl, ip, k, r) != 0) {
+            rc = -1;
+            goto done;
         }
         while (ev < o->n_events && o->events[ev].cycle <= k) {
             const sim_run_event *e = &o->events[ev++];
@@ -653,6 +431,8 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
             rc = -1;
             goto done;
         }
+        if (out->stream) /* windowed: what lies behind the planner and the deviation check goes */
+            sim_prog_trim(p, fs.next ? fs.next - 1 : 0, out->stream->elem_lo);
         if (s == LSM_INTERP_DONE) {
             k_done = k;
             break;
@@ -666,7 +446,7 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
          * come */
         const bool moved = memcmp(pos, last_pos, sizeof last_pos) != 0;
         memcpy(last_pos, pos, sizeof last_pos);
-        still = (moved || next != next_before || k < gate.dwell_until || ev < o->n_events) ? 0 : still + 1;
+        still = (moved || fs.next != next_before || k < fs.gate.dwell_until || ev < o->n_events) ? 0 : still + 1;
         if (still >= stall_cycles) {
             snprintf(r->err, sizeof r->err,
                      "stalled: no motion and no block taken for %.0f s of machine time (at %.3f s, interpolator %s, "
@@ -675,17 +455,17 @@ static int run_lissom(const sim_run_opts *o, const prog *p, rec *out, sim_run_re
                      s == LSM_INTERP_IDLE   ? "idle"
                      : s == LSM_INTERP_HELD ? "held"
                                             : "running",
-                     cb ? (unsigned)cb->seq : 0u, next, p->n);
+                     cb ? (unsigned)cb->seq : 0u, fs.next, p->total);
             rc = -1;
             goto done;
         }
-        if (o->progress && (k & 0xFFF) == 0 && p->n) /* done: the source line being run, of the last one */
-            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, cb ? (double)cb->seq / (double)p->v[p->n - 1].b.line : 0,
+        if (o->progress && (k & 0xFFF) == 0 && p->total) /* done: the source line being run, of the last one */
+            o->progress(o->progress_ctx, SIM_RUN_PHASE_PLAN, cb ? (double)cb->seq / (double)p->last_line : 0,
                         (double)k * cfg.cycle_s);
     }
     r->cycles = k_done + 1;
     r->duration_s = (double)r->cycles * cfg.cycle_s;
-    r->plan_ns_per_block = appended ? t_append / (double)appended : 0;
+    r->plan_ns_per_block = fs.appended ? fs.t_append / (double)fs.appended : 0;
     r->interp_ns_per_cycle = out->n ? t_step / (double)out->n : 0;
     r->prepare_ns_per_piece = ip->prepared ? t_prep / (double)ip->prepared : 0;
 done:
@@ -720,7 +500,17 @@ typedef struct gpath {
     size_t hint;   /* the block of the last evaluation */
     double *stops; /* where the planner stops (LSM_PB_STOP), ascending: VPOp comes to rest there too */
     size_t n_stops;
+    double *jsc; /* vpop-cont: the jerk scale per bin of jsc_bin_mm along the path (vp_cont_motion) */
+    size_t n_jsc;
+    double jsc_bin_mm;
 } gpath;
+
+static double gpath_jscale(void *ctx, double s)
+{
+    const gpath *gp = ctx;
+    const double b = floor(s / gp->jsc_bin_mm);
+    return gp->jsc[b < 0 ? 0 : b >= (double)gp->n_jsc ? gp->n_jsc - 1 : (size_t)b];
+}
 
 static double gpath_next_stop(void *ctx, double s)
 {
@@ -927,8 +717,21 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
  *     s = (-S_-1 + 9 S_0 + 9 S_1 - S_2) / 16,   s' = (S_-1 - 27 S_0 + 27 S_1 - S_2) / (24 dt),
  *     s'' = (S_-1 - S_0 - S_1 + S_2) / (2 dt²),  s''' = (S_2 - 3 S_1 + 3 S_0 - S_-1) / dt³.
  */
-static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt)
+/* The bin of gp's jerk scale that holds path point s. */
+static size_t vp_cont_bin(const gpath *gp, double s)
 {
+    const double fb = floor(s / gp->jsc_bin_mm);
+    return fb < 0 ? 0 : fb >= (double)gp->n_jsc ? gp->n_jsc - 1 : (size_t)fb;
+}
+
+/* The largest continuous jerk over the limit (vpop_cont_max); with binmax != NULL, also the largest in each bin of
+ * gp's jerk scale (binmax[gp->n_jsc], set here). */
+static double vpop_cont_scan(const gpath *gp, double *binmax, const sim_vpop_limits *lim, const double *S, size_t n,
+                             double dt)
+{
+    if (binmax)
+        for (size_t i = 0; i < gp->n_jsc; i++)
+            binmax[i] = 0;
     if (n == 0)
         return 0;
     double worst = 0;
@@ -941,12 +744,23 @@ static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const d
         const double sm2 = w[0], sm1 = w[1], s0 = w[2], s1 = w[3], s2 = w[4];
         const double v = (s1 - sm1) / (2 * dt), a = (s1 - 2 * s0 + sm1) / (dt * dt);
         const double j = (s2 - 2 * s1 + 2 * sm1 - sm2) / (2 * dt * dt * dt);
-        worst = fmax(worst, vp_jerk_ratio(gp, lim, s0, v, a, j));
+        const double r0 = vp_jerk_ratio(gp, lim, s0, v, a, j);
         const double sh = (-sm1 + 9 * s0 + 9 * s1 - s2) / 16, vh = (sm1 - 27 * s0 + 27 * s1 - s2) / (24 * dt);
         const double ah = (sm1 - s0 - s1 + s2) / (2 * dt * dt), jh = (s2 - 3 * s1 + 3 * s0 - sm1) / (dt * dt * dt);
-        worst = fmax(worst, vp_jerk_ratio(gp, lim, sh, vh, ah, jh));
+        const double rh = vp_jerk_ratio(gp, lim, sh, vh, ah, jh);
+        worst = fmax(worst, fmax(r0, rh));
+        if (binmax) {
+            const size_t b0 = vp_cont_bin(gp, s0), bh = vp_cont_bin(gp, sh);
+            binmax[b0] = fmax(binmax[b0], r0);
+            binmax[bh] = fmax(binmax[bh], rh);
+        }
     }
     return worst;
+}
+
+static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt)
+{
+    return vpop_cont_scan(gp, NULL, lim, S, n, dt);
 }
 
 /* The Hermite table of the path (gpath). */
@@ -973,7 +787,7 @@ static size_t vp_block_at(const gpath *gp, double s)
 /* The program through the look-ahead planner (its geometry: lines, arcs, corner clothoids; VPOp then plans the
  * motion along it). Returns 0, or -1 with r->err set. */
 static int vp_plan_geometry(lsm_planner *pl, const lsm_planner_config *cfg, lsm_pblock *store, uint32_t cap,
-                            const lsm_real start[LSM_MAX_AXES], const prog *p, sim_run_result *r)
+                            const lsm_real start[LSM_MAX_AXES], const sim_prog *p, sim_run_result *r)
 {
     lsm_status st = lsm_planner_init(pl, cfg, store, cap, start);
     if (st != LSM_OK) {
@@ -1096,20 +910,32 @@ static void vp_best_motion(const sim_run_opts *o, const sim_vpop_path *path, sim
     }
 }
 
-/* VPOp held to its jerk limits continuously (pathrun.h: SIM_RUN_VPOP_CONT): its jerk limits scaled by the largest
- * factor sigma (bisection) for which vpop_cont_max of its motion against the unscaled limits is <= 1. Only the jerk is
- * scaled: v and a hold on the samples and are not what leaves the limits between them. */
-#define VP_CONT_ITERS 12       /* at most this many VPOp runs */
-#define VP_CONT_SIGMA_MIN 0.05 /* below this the motion is not a useful reference: give up (no motion) */
-#define VP_CONT_REL 0.01       /* sigma to 1 % of its bracket */
-#define VP_CONT_TOL 1e-9       /* relative: rounding of the differences */
-static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path, const gpath *gp, sim_vpop_limits *lim,
-                           double cycle_s, double **S, size_t *n, sim_run_result *r)
+/* VPOp held to its jerk limits continuously (pathrun.h: SIM_RUN_VPOP_CONT), i.e. its continuous axis jerk
+ * (vpop_cont_scan, Beudaert eq 3, against the unscaled limits) <= J at its samples and halfway between them. Only
+ * the jerk limit is scaled: v and a hold on the samples and are not what leaves the limits between them.
+ *   Stage 1, global: one factor sigma on every axis's jerk limit, the largest (bisection) for which the motion holds.
+ *   Stage 2, local: from that motion, the jerk scale (vpop.h, jscale: one per bin of the path) is raised in the
+ *   bins whose neighbourhood has slack (continuous jerk under VP_CONT_SLACK of the limit), and VPOp runs again;
+ *   bins whose raise made a point exceed the limit go back to their last value that held and stay there. The
+ *   fastest motion that holds is kept, so stage 2 can only shorten stage 1's. */
+#define VP_CONT_ITERS 12        /* stage 1: at most this many VPOp runs */
+#define VP_CONT_SIGMA_MIN 0.05  /* below this the motion is not a useful reference: give up (no motion) */
+#define VP_CONT_REL 0.01        /* sigma to 1 % of its bracket */
+#define VP_CONT_TOL 1e-9        /* relative: rounding of the differences */
+#define VP_CONT_LOCAL_ITERS 24  /* stage 2: at most this many VPOp runs */
+#define VP_CONT_BIN_MIN_MM 0.05 /* bins: at least this long ... */
+#define VP_CONT_BINS_MAX 65536  /* ... and at most this many (long paths) */
+#define VP_CONT_SLACK 0.98      /* a bin is raised while its neighbourhood stays under this share of the limit, */
+#define VP_CONT_RAISE_MIN 1.01  /* ... down to this (a raise that broke it far from the raised bins halves the step) */
+#define VP_CONT_RAISE_MAX 1.15  /* by at most this factor a run (toward VP_CONT_SLACK / its largest ratio) */
+#define VP_CONT_NEAR 3          /* neighbourhood: bins either side (the steps whose jerk shapes a point's motion) */
+
+/* Stage 1. *scale: sigma (unchanged when nothing holds). */
+static void vp_cont_global(const sim_run_opts *o, const sim_vpop_path *path, const gpath *gp, sim_vpop_limits *lim,
+                           double cycle_s, double **S, size_t *n, double *scale)
 {
     const sim_vpop_limits base = *lim;
     double lo = 0, hi = 1, sigma = 1;
-    *S = NULL;
-    *n = 0;
     for (int it = 0; it < VP_CONT_ITERS; it++) {
         for (int i = 0; i < SIM_VPOP_AXES; i++)
             lim->j[i] = base.j[i] * sigma;
@@ -1122,7 +948,7 @@ static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path, con
             *S = S2;
             *n = n2;
             lo = sigma;
-            r->vpop_jerk_scale = sigma;
+            *scale = sigma;
         } else {
             free(S2);
             hi = sigma;
@@ -1138,6 +964,122 @@ static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path, con
         }
     }
     *lim = base;
+}
+
+/* The largest of binmax over bin b's neighbourhood. */
+static double vp_cont_near(const gpath *gp, const double *binmax, size_t b)
+{
+    double m = 0;
+    const size_t lo = b > VP_CONT_NEAR ? b - VP_CONT_NEAR : 0;
+    for (size_t i = lo; i <= b + VP_CONT_NEAR && i < gp->n_jsc; i++)
+        m = fmax(m, binmax[i]);
+    return m;
+}
+
+/* Stage 2, one proposal: raises the bins with slack in binmax (the motion that holds, on gp->jsc == good). Returns
+ * the count raised. */
+static size_t vp_cont_raise(gpath *gp, const double *binmax, const unsigned char *frozen, double raise_max)
+{
+    size_t raised = 0;
+    for (size_t b = 0; b < gp->n_jsc; b++) {
+        const double m = vp_cont_near(gp, binmax, b);
+        if (frozen[b] || gp->jsc[b] >= 1 || m >= VP_CONT_SLACK)
+            continue;
+        gp->jsc[b] = fmin(1, gp->jsc[b] * (m > 0 ? fmin(raise_max, VP_CONT_SLACK / m) : raise_max));
+        raised++;
+    }
+    return raised;
+}
+
+/* Stage 2, after a proposal that broke the limit: the bins near a point over it go back to good and freeze. */
+static size_t vp_cont_revert(gpath *gp, const double *binmax, const double *good, unsigned char *frozen)
+{
+    size_t n = 0;
+    for (size_t b = 0; b < gp->n_jsc; b++)
+        if (vp_cont_near(gp, binmax, b) > 1 + VP_CONT_TOL && gp->jsc[b] != good[b]) {
+            gp->jsc[b] = good[b];
+            frozen[b] = 1;
+            n++;
+        }
+    return n;
+}
+
+/* Stage 2 (gp->jsc: the scales of the motion *S, which holds). */
+static void vp_cont_local(const sim_run_opts *o, const sim_vpop_path *path, gpath *gp, const sim_vpop_limits *lim,
+                          double cycle_s, double **S, size_t *n)
+{
+    double *binmax = malloc(gp->n_jsc * sizeof *binmax), *good = malloc(gp->n_jsc * sizeof *good);
+    unsigned char *frozen = calloc(gp->n_jsc, 1);
+    if (binmax && good && frozen) {
+        memcpy(good, gp->jsc, gp->n_jsc * sizeof *good);
+        (void)vpop_cont_scan(gp, binmax, lim, *S, *n, cycle_s);
+        int propose = 1; /* 0: the last proposal broke the limit; it runs again without the bins reverted */
+        double raise_max = VP_CONT_RAISE_MAX;
+        for (int it = 0; it < VP_CONT_LOCAL_ITERS; it++) {
+            if (propose && vp_cont_raise(gp, binmax, frozen, raise_max) == 0)
+                break;
+            double *S2 = NULL;
+            size_t n2 = 0;
+            vp_best_motion(o, path, (sim_vpop_limits *)lim, cycle_s, &S2, &n2);
+            if (!S2)
+                break;
+            const double wr = vpop_cont_scan(gp, binmax, lim, S2, n2, cycle_s);
+            if (wr > 1 + VP_CONT_TOL) {
+                free(S2);
+                propose = 0;
+                if (vp_cont_revert(gp, binmax, good, frozen) ==
+                    0) { /* not near a raised bin: all back, smaller raises */
+                    memcpy(gp->jsc, good, gp->n_jsc * sizeof *good);
+                    (void)vpop_cont_scan(gp, binmax, lim, *S, *n, cycle_s);
+                    raise_max = sqrt(raise_max);
+                    propose = 1;
+                    if (raise_max < VP_CONT_RAISE_MIN)
+                        break;
+                }
+                continue;
+            }
+            propose = 1;
+            memcpy(good, gp->jsc, gp->n_jsc * sizeof *good);
+            if (n2 < *n) {
+                free(*S);
+                *S = S2;
+                *n = n2;
+            } else {
+                free(S2);
+            }
+        }
+        memcpy(gp->jsc, good, gp->n_jsc * sizeof *good);
+    }
+    free(binmax);
+    free(good);
+    free(frozen);
+}
+
+/* r->vpop_jerk_scale: the smallest factor on the jerk limit anywhere on the path. */
+static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path0, gpath *gp, sim_vpop_limits *lim,
+                           double cycle_s, double **S, size_t *n, sim_run_result *r)
+{
+    *S = NULL;
+    *n = 0;
+    double sigma = 1;
+    vp_cont_global(o, path0, gp, lim, cycle_s, S, n, &sigma);
+    if (!*S)
+        return;
+    r->vpop_jerk_scale = sigma;
+    gp->jsc_bin_mm = fmax(VP_CONT_BIN_MIN_MM, gp->len / VP_CONT_BINS_MAX);
+    gp->n_jsc = (size_t)(gp->len / gp->jsc_bin_mm) + 1;
+    gp->jsc = malloc(gp->n_jsc * sizeof *gp->jsc);
+    if (!gp->jsc)
+        return;
+    for (size_t i = 0; i < gp->n_jsc; i++)
+        gp->jsc[i] = sigma;
+    sim_vpop_path path = *path0;
+    path.jscale = gpath_jscale;
+    vp_cont_local(o, &path, gp, lim, cycle_s, S, n);
+    double smallest = 1;
+    for (size_t i = 0; i < gp->n_jsc; i++)
+        smallest = fmin(smallest, gp->jsc[i]);
+    r->vpop_jerk_scale = smallest;
 }
 
 /* The samples as setpoints (the last one exactly the programmed end), with feed and block sequence number. */
@@ -1162,14 +1104,14 @@ static int vp_record(gpath *gp, const lsm_planner *pl, const double *S, size_t n
     return 0;
 }
 
-static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_result *r)
+static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_result *r)
 {
     lsm_planner_config cfg;
     if (o->cfg_override)
         cfg = *o->cfg_override;
     else
         sim_run_planner_config(o->machine, &cfg);
-    const uint32_t cap = (uint32_t)(4 * p->n + 64);
+    const uint32_t cap = (uint32_t)(4 * p->total + 64);
     lsm_pblock *store = calloc(cap, sizeof *store);
     lsm_planner *pl = calloc(1, sizeof *pl);
     gpath gp = {0};
@@ -1186,9 +1128,9 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
         snprintf(r->err, sizeof r->err, "out of memory");
         goto done;
     }
-    lsm_real start[LSM_MAX_AXES] = {0};
-    if (p->n)
-        memcpy(start, p->v[0].b.start, sizeof start);
+    lsm_real start[LSM_MAX_AXES];
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        start[i] = (lsm_real)p->start[i];
     if (vp_plan_geometry(pl, &cfg, store, cap, start, p, r) != 0)
         goto done;
     if (vp_gpath_fill(&gp, pl, start) != 0) {
@@ -1196,7 +1138,7 @@ static int run_vpop(const sim_run_opts *o, const prog *p, rec *out, sim_run_resu
         goto done;
     }
     vp_gpath_table(&gp);
-    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop};
+    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL};
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
     for (int i = 0; i < o->machine->n_axes; i++) {
@@ -1239,6 +1181,7 @@ done:
     free(gp.stops);
     free(gp.tab_off);
     free(gp.tab_m);
+    free(gp.jsc);
     return rc;
 }
 
@@ -1255,16 +1198,16 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
         r->axis_index[i] = m->axes[i].index;
         r->axis_name[i] = m->axes[i].name;
     }
-    prog p;
-    if (prog_load(o, &p, r->err, sizeof r->err) != 0) {
-        prog_free(&p);
+    /* constant memory where nothing is kept for later: the Lissom run measured as it goes */
+    const bool windowed = o->summary_only && o->planner == SIM_RUN_LISSOM;
+    sim_prog p;
+    if (sim_prog_open(&p, o->text, o->len, o->path, windowed, o->machine->axis_mask, o->machine->blend_tol_mm, r->err,
+                      sizeof r->err) != 0)
         return -1;
-    }
     memcpy(r->prog_end, p.end, sizeof r->prog_end);
-    if (p.n)
-        memcpy(r->start, p.v[0].b.start, sizeof r->start);
-    r->prog_blocks = p.n;
-    r->prog_length_mm = p.length;
+    memcpy(r->start, p.start, sizeof r->start);
+    r->prog_blocks = p.total;
+    r->prog_length_mm = p.length_mm;
 
     meter mt;
     meter_init(&mt, &p, m, r, o->summary_only && o->drives);
@@ -1273,7 +1216,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
             lsm_status st = sim_drive_init(&mt.drv[i], &m->axes[i].drive, m->cycle_s, 0.0);
             if (st != LSM_OK) {
                 snprintf(r->err, sizeof r->err, "drive %c: %s", m->axes[i].name, lsm_status_str(st));
-                prog_free(&p);
+                sim_prog_free(&p);
                 return -1;
             }
         }
@@ -1296,7 +1239,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
         free(out.q);
         free(out.feed);
         free(out.line);
-        prog_free(&p);
+        sim_prog_free(&p);
         return rc;
     }
     r->n = o->summary_only ? 0 : out.n;
@@ -1304,21 +1247,28 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     r->feed = out.feed;
     r->line = out.line;
     r->has_act = o->drives && mt.n + r->n > 0; /* (as act != NULL when the setpoints are kept) */
-    if (o->summary_only) {                     /* measured while it ran */
-        meter_finish(&mt);
-        prog_free(&p);
+    r->prog_held_max = p.held_max;
+    if (!o->summary_only) /* measured now, else while it ran */
+        for (size_t k = 0; k < r->n; k++)
+            meter_push(&mt, r->q + k * LSM_MAX_AXES, r->line[k]);
+    meter_finish(&mt);
+    if (mt.window_misses) {
+        snprintf(r->err, sizeof r->err, "internal: %zu deviations needed path elements no longer held",
+                 mt.window_misses);
+        sim_prog_free(&p);
+        return -1;
+    }
+    if (o->summary_only) {
+        sim_prog_free(&p);
         return 0;
     }
-    for (size_t k = 0; k < r->n; k++)
-        meter_push(&mt, r->q + k * LSM_MAX_AXES, r->line[k]);
-    meter_finish(&mt);
     /* drives */
     const double dt = m->cycle_s;
     if (o->drives && r->n) {
         r->act = calloc(r->n * LSM_MAX_AXES, sizeof *r->act);
         if (!r->act) {
             snprintf(r->err, sizeof r->err, "out of memory");
-            prog_free(&p);
+            sim_prog_free(&p);
             return -1;
         }
         for (int i = 0; i < m->n_axes; i++) {
@@ -1327,10 +1277,10 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
             lsm_status st = sim_drive_init(&d, &m->axes[i].drive, dt, r->q[a]);
             if (st != LSM_OK) {
                 snprintf(r->err, sizeof r->err, "drive %c: %s", m->axes[i].name, lsm_status_str(st));
-                prog_free(&p);
+                sim_prog_free(&p);
                 return -1;
             }
-            double q1 = p.n ? p.v[0].b.start[a] : r->q[a], q2 = q1;
+            double q1 = p.total ? p.start[a] : r->q[a], q2 = q1;
             for (size_t k = 0; k < r->n; k++) {
                 const double q0 = r->q[k * LSM_MAX_AXES + a];
                 const double v = (q0 - q1) / dt, acc = (q0 - 2 * q1 + q2) / (dt * dt);
@@ -1348,7 +1298,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
             }
         }
     }
-    prog_free(&p);
+    sim_prog_free(&p);
     return 0;
 }
 

@@ -24,10 +24,12 @@
 #include "interp.h"
 #include "machine.h"
 #include "planner.h"
+#include "simprog.h"
 
 /* SIM_RUN_VPOP_CONT: VPOp held to its jerk limits continuously, not only on its samples' differences (pathrun.c,
- * run_vpop_cont: its jerk limits scaled by the largest factor for which the continuous axis jerk of its own motion,
- * Beudaert eq 3 on the exact path derivatives, at the samples and halfway between them, stays <= J). */
+ * vp_cont_motion: its jerk limits scaled, first by one factor for the whole path, then bin by bin along it, so that
+ * the continuous axis jerk of its own motion, Beudaert eq 3 on the exact path derivatives, at the samples and
+ * halfway between them, stays <= J). */
 typedef enum sim_run_planner { SIM_RUN_LISSOM = 0, SIM_RUN_VPOP = 1, SIM_RUN_VPOP_CONT = 2 } sim_run_planner;
 
 static inline const char *sim_run_planner_name(sim_run_planner p)
@@ -50,8 +52,9 @@ typedef void (*sim_run_progress_fn)(void *ctx, sim_run_phase phase, double done,
 
 typedef struct sim_run_opts {
     const sim_machine *machine;
-    const char *text; /* the G-code program */
+    const char *text; /* the G-code program, text[len] ... */
     size_t len;
+    const char *path; /* ... or, with text NULL, the file it is read from (in chunks) */
     sim_run_planner planner;
     uint32_t capacity;   /* planner blocks; 0: max(256, 3 lookahead_blocks + 8) */
     bool drives;         /* also simulate the drives */
@@ -64,20 +67,17 @@ typedef struct sim_run_opts {
     lsm_planner_config *cfg_override; /* optional: planner configuration to use instead of the machine's */
     /* summary_only: measure the setpoints while running and keep none (constant memory): the result has the
      * summary (the same numbers as a run that keeps them) with n = 0 and q = feed = line = act = NULL; the drives
-     * run with the planner (no progress reports of their own) */
+     * run with the planner (no progress reports of their own). With the Lissom planner the program is windowed
+     * too (simprog.h: parsed twice, held only around the look-ahead), so memory does not grow with it */
     bool summary_only;
     sim_run_progress_fn progress; /* optional progress reports (NULL: none) */
     void *progress_ctx;
 } sim_run_opts;
 
-/* A machine function of the program (gcode.h events), where it comes among the blocks and when it ran. The Lissom
- * planner runs the program up to an event that needs an exact stop, lets the machine come to rest on the end of the
- * block before it, runs it (G4: the dwell's whole cycles at rest; M0/M1: the pause is resumed at once) and goes on. */
-typedef struct sim_run_mfunc {
-    lsm_gcode_event ev;
-    size_t before_block; /* index of the first program block after it (= blocks before it) */
-    double t_s;          /* machine time when it ran (s); -1: not run (the VPOp reference runs no events) */
-} sim_run_mfunc;
+/* sim_run_mfunc (simprog.h): a machine function of the program (gcode.h events), where it comes among the blocks
+ * and when it ran. The Lissom planner runs the program up to an event that needs an exact stop, lets the machine
+ * come to rest on the end of the block before it, runs it (G4: the dwell's whole cycles at rest; M0/M1: the pause
+ * is resumed at once) and goes on. */
 
 typedef struct sim_run_result {
     size_t n; /* setpoints kept (one per cycle; 0 with summary_only) */
@@ -112,9 +112,12 @@ typedef struct sim_run_result {
     double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
     double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
     double cont_jerk_max;        /* vpop: continuous axis jerk / J at the samples and halfway between (-1: n/a) */
-    double vpop_jerk_scale;      /* vpop-cont: the factor its jerk limits were scaled by (1 for vpop; -1: n/a) */
+    double vpop_jerk_scale;      /* vpop-cont: the smallest factor its jerk limits were scaled by anywhere on the path
+                                    (1 for vpop; -1: n/a) */
     sim_run_mfunc *mfuncs;       /* the program's machine functions, in order */
     size_t n_mfuncs;
+    size_t prog_held_max;  /* most program blocks + path elements held at once (simprog.h; windowed with
+                              summary_only and the Lissom planner: bounded by the look-ahead, not the program) */
     size_t n_gcode_errors; /* refused lines (the first is in err; `lissom-sim check` lists them all) */
     char err[320];
 } sim_run_result;

@@ -82,6 +82,7 @@ static int step_bounds(const vctx *c, const hist *h, stepb *b)
 {
     const sim_vpop_limits *L = c->lim;
     const double dt = c->dt;
+    const double jdt3 = (c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0) * dt * dt * dt;
     int ok = 1;
     for (int i = 0; i < SIM_VPOP_AXES; i++) {
         const double q0 = h->q[0][i], q1 = h->q[1][i], q2 = h->q[2][i];
@@ -89,8 +90,8 @@ static int step_bounds(const vctx *c, const hist *h, stepb *b)
         const double pa = 2 * q0 - q1, pj = 3 * q0 - 3 * q1 + q2;
         l = fmax(l, pa - L->a[i] * dt * dt);
         u = fmin(u, pa + L->a[i] * dt * dt);
-        l = fmax(l, pj - L->j[i] * dt * dt * dt);
-        u = fmin(u, pj + L->j[i] * dt * dt * dt);
+        l = fmax(l, pj - L->j[i] * jdt3);
+        u = fmin(u, pj + L->j[i] * jdt3);
         b->lo[i] = l;
         b->hi[i] = u;
         if ((L->axis_mask & (1u << i)) && l > u)
@@ -420,16 +421,17 @@ static int brake_step(const vctx *c, const hist *h, double beta, double *sel)
     /* the smallest s whose (v', a') can still stop cleanly: v' >= a'² / (2 J) when a' < 0, with J the tangential
      * jerk a straight line in the local direction allows, min_i J_i / |dq_i/ds| */
     double J = HUGE_VAL;
+    const double js = c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0;
     if (beta < -1.5) {
-        J = c->jt;
+        J = js * c->jt;
     } else {
         double q[SIM_VPOP_AXES], d[SIM_VPOP_AXES];
         eval_d(c, h->s[0], q, d);
         for (int i = 0; i < SIM_VPOP_AXES; i++)
             if ((c->lim->axis_mask & (1u << i)) && fabs(d[i]) > 1e-9)
-                J = fmin(J, c->lim->j[i] / fabs(d[i]));
+                J = fmin(J, js * c->lim->j[i] / fabs(d[i]));
         if (!(J < HUGE_VAL))
-            J = c->jt;
+            J = js * c->jt;
     }
     double lo = smin, hi = smax;
     const double s = lo;
@@ -780,7 +782,7 @@ void sim_bspline_eval_s(void *ctx, double s, double q[SIM_VPOP_AXES])
 
 sim_vpop_path sim_bspline_path(sim_bspline *b)
 {
-    sim_vpop_path p = {b->length, sim_bspline_eval_s, sim_bspline_feed, b, sim_bspline_eval_sd, NULL};
+    sim_vpop_path p = {b->length, sim_bspline_eval_s, sim_bspline_feed, b, sim_bspline_eval_sd, NULL, NULL};
     return p;
 }
 

@@ -55,6 +55,10 @@ typedef struct sim_vpop_path {
     /* optional: the first point >= s where the motion must be at rest (a corner the geometry does not smooth),
      * or length. The planner does not pass such a point before it is at rest on it. NULL: none but L. */
     double (*next_stop)(void *ctx, double s);
+    /* optional: a factor in (0, 1] on every axis's jerk limit for the step that starts at s (a reference held to
+     * its limits between its samples lowers its jerk where its motion exceeds them there: pathrun.c, vpop-cont).
+     * NULL: 1 everywhere. */
+    double (*jscale)(void *ctx, double s);
 } sim_vpop_path;
 
 typedef struct sim_vpop_limits {

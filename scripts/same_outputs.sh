@@ -16,11 +16,12 @@ case "$cmd" in
     rm -rf "$dir"; mkdir -p "$dir"
     for prog in host_sim/examples/*.ngc; do
       for m in router beudaert_table1 kombarov_table1; do
-        for drive in drive no-drive; do
+        for drive in drive no-drive no-csv; do
           name=$(basename "$prog" .ngc)-$m-$drive
           out=$(mktemp -d)
           args=(run "$prog" --machine "host_sim/machines/$m.json" --out "$out" --json --no-progress)
           [ "$drive" = no-drive ] && args+=(--no-drive)
+          [ "$drive" = no-csv ] && args+=(--no-csv) # the windowed program and the streaming measurement
           if "$sim" "${args[@]}" > "$out/stdout.json" 2> "$out/stderr.txt"; then rc=0; else rc=$?; fi
           echo "$rc" > "$dir/$name.rc"
           sed -E 's/"[a-z_]*_ns_[a-z_]*": [-0-9.eE+null]+/"ns": 0/g' "$out/stdout.json" > "$dir/$name.json"

@@ -216,6 +216,12 @@ typedef double lsm_real;
 #ifndef LSM_CANOPEN_SDO_BUF
 #define LSM_CANOPEN_SDO_BUF 64
 #endif
+/* SDO request frames in flight from the tick to the background SDO server, and responses back (canopen.h, with
+ * sdo_background). A CiA 301 client has one confirmed request outstanding per channel (two when it aborts and starts
+ * again at once), so 8 is never reached by a client that keeps the protocol. Default 8; unit: frames; power of 2. */
+#ifndef LSM_CANOPEN_SDO_QUEUE
+#define LSM_CANOPEN_SDO_QUEUE 8u
+#endif
 /* Default time a segmented SDO transfer may wait for its next segment (co_sdo.h). Default 1 000 000; unit: us. */
 #ifndef LSM_CO_SDO_TIMEOUT_US
 #define LSM_CO_SDO_TIMEOUT_US 1000000u

@@ -15,6 +15,8 @@
  * CANopen transmits every multi-byte number little-endian (CiA 301 §7.1.2): the lsm_can_get_* /
  * lsm_can_put_* helpers convert without caring about the host's byte order or alignment.
  * Units: none (bytes, identifiers).
+ * Contexts: a frame is plain data; a TX queue belongs to one context (the node's to the tick: canopen.h). The SDO
+ * server in the background hands its responses to the tick through a ring (canopen.h), never through the queue.
  */
 #ifndef LSM_CAN_H
 #define LSM_CAN_H
@@ -45,27 +47,29 @@ typedef struct lsm_can_txq {
     uint32_t dropped;   /* frames refused because the queue was full (wraps) */
 } lsm_can_txq;
 
-/* Binds the queue to storage[cap]. Errors: LSM_E_NULL, LSM_E_ARG (cap 0 or > 65535). */
+/* Binds the queue to storage[cap]. Errors: LSM_E_NULL, LSM_E_ARG (cap 0 or > 65535). The queue's owner (the tick
+ * for the node's TX queue), before use. */
 lsm_status lsm_can_txq_init(lsm_can_txq *q, lsm_can_frame *storage, size_t cap);
 
-/* Appends a copy of *f. LSM_E_FULL when no room (nothing stored, `dropped` counts it). */
+/* Appends a copy of *f. LSM_E_FULL when no room (nothing stored, `dropped` counts it). The queue's owner (the tick
+ * for the node's TX queue), as every txq call below. */
 lsm_status lsm_can_txq_push(lsm_can_txq *q, const lsm_can_frame *f);
 
-/* Removes the oldest frame into *out. Returns false when the queue is empty (*out untouched). */
+/* Removes the oldest frame into *out. Returns false when the queue is empty (*out untouched). The queue's owner. */
 bool lsm_can_txq_pop(lsm_can_txq *q, lsm_can_frame *out);
 
-/* Frames queued. */
+/* Frames queued. The queue's owner. */
 size_t lsm_can_txq_count(const lsm_can_txq *q);
 
-/* Drops every queued frame (e.g. at bus-off: stale frames must not go out after recovery). */
+/* Drops every queued frame (e.g. at bus-off: stale frames must not go out after recovery). The queue's owner. */
 void lsm_can_txq_clear(lsm_can_txq *q);
 
-/* Little-endian access to p[0..n-1]; no alignment needed. */
+/* Little-endian access to p[0..n-1]; no alignment needed. Any context (pure). */
 uint16_t lsm_can_get_u16(const uint8_t *p);
 uint32_t lsm_can_get_u32(const uint8_t *p);
 void lsm_can_put_u16(uint8_t *p, uint16_t v);
 void lsm_can_put_u32(uint8_t *p, uint32_t v);
-/* n = 1..8 bytes, zero-extended / truncated. */
+/* n = 1..8 bytes, zero-extended / truncated. Any context (pure). */
 uint64_t lsm_can_get_le(const uint8_t *p, size_t n);
 void lsm_can_put_le(uint8_t *p, uint64_t v, size_t n);
 

@@ -131,7 +131,7 @@ static const lsm_co_od_entry k_od[] = {
     ENT(0x5010, 0, LSM_CO_T_DOMAIN, LSM_CO_PATH_BLOCK_MAX, W_ | HK_, 0, 0, 0),
     E_U8(0x5020, 0, R_ | TP_, 0, 0, OFF(machine_status)),
     /* manufacturer, the port's tick statistics (lsm_canopen_set_tick_stats) */
-    E_U8(0x5F00, 0, CONST_, 0, 0, 8),
+    E_U8(0x5F00, 0, CONST_, 0, 0, 10),
     E_U32(0x5F00, 1, R_, 0, 0, OFF(tick_stats.ticks)),
     E_U32(0x5F00, 2, R_, 0, 0, OFF(tick_stats.overruns)),
     E_U32(0x5F00, 3, R_, 0, 0, OFF(tick_stats.worst_instr)),
@@ -140,6 +140,8 @@ static const lsm_co_od_entry k_od[] = {
     E_U32(0x5F00, 6, R_, 0, 0, OFF(tick_stats.clock_ms)),
     E_U32(0x5F00, 7, R_, 0, 0, OFF(tick_stats.path_underruns)),
     E_U32(0x5F00, 8, R_, 0, 0, OFF(tick_stats.path_min_ahead)),
+    E_U32(0x5F00, 9, R_, 0, 0, OFF(sdo_link.most_waiting)),
+    E_U32(0x5F00, 10, R_, 0, 0, OFF(sdo_link.refused)),
     /* CiA 402, per axis k at index + 0x800·k */
     E_I16(0x6007, 0, RW_, G_AXIS, R_ABORT_OPT, AX(abort_option)),
     E_U16(0x603F, 0, R_ | TP_, G_AXIS, 0, AX(error_code)),
@@ -293,6 +295,215 @@ static lsm_status default_pdos(lsm_canopen *n)
     return lsm_co_pdo_configure(&n->pdo, true, 3, 1u, m, c, true);
 }
 
+/* ---- SDO: the server in the tick, or in the background with the hand-off of canopen.h ----------------- */
+
+#define SDO_Q LSM_CANOPEN_SDO_QUEUE
+_Static_assert((LSM_CANOPEN_SDO_QUEUE & (LSM_CANOPEN_SDO_QUEUE - 1u)) == 0u, "the SDO rings' size: a power of two");
+
+static lsm_status sdo_init(lsm_canopen *n)
+{
+    return lsm_co_sdo_init(&n->sdo, &n->od, n->cfg.node_id, n->sdo_buf, sizeof n->sdo_buf, n->cfg.sdo_timeout_us);
+}
+
+/* The SDO server back to idle with its defaults (reset communication, reset node, boot): in the tick's own server at
+ * once; with the background server through the epoch (it drops its transfer, and what is in flight is dropped). */
+static lsm_status sdo_restart(lsm_canopen *n)
+{
+    if (!n->sdo_link.enabled)
+        return sdo_init(n);
+    lsm_atomic_put_release(&n->sdo_link.epoch, lsm_atomic_get(&n->sdo_link.epoch) + 1u);
+    return LSM_OK;
+}
+
+/* An open transfer dropped without an answer (NMT stopped). */
+static void sdo_reset(lsm_canopen *n)
+{
+    if (n->sdo_link.enabled)
+        (void)sdo_restart(n);
+    else
+        lsm_co_sdo_reset(&n->sdo);
+}
+
+/* Tick: an SDO request for the background server. A full ring refuses it at once with 0x05040005 (a client abort,
+ * which needs no answer, is just dropped), so the tick never waits. */
+static lsm_status sdo_push(lsm_canopen *n, const lsm_can_frame *f, uint32_t now_us)
+{
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    if (f->dlc != 8u)
+        return LSM_E_CO_FRAME; /* malformed: no answer, as the server itself would do */
+    const uint32_t head = lsm_atomic_get(&l->req_head);
+    const uint32_t waiting = head - lsm_atomic_get_acquire(&l->req_tail);
+    if (waiting >= SDO_Q) {
+        l->refused++;
+        const uint8_t ccs = (uint8_t)(f->data[0] >> 5);
+        if (ccs == 4u)
+            return LSM_E_FULL;
+        const bool names = ccs == 1u || ccs == 2u; /* initiate requests name their object; segments do not */
+        lsm_can_frame a;
+        a.id = n->sdo_cob_tx;
+        a.dlc = 8u;
+        a.flags = 0u;
+        a.data[0] = 0x80u;
+        lsm_can_put_u16(&a.data[1], names ? lsm_can_get_u16(&f->data[1]) : 0u);
+        a.data[3] = names ? f->data[3] : 0u;
+        lsm_can_put_u32(&a.data[4], LSM_CO_ABORT_NO_MEM);
+        (void)lsm_can_txq_push(&n->txq, &a);
+        return LSM_E_FULL;
+    }
+    lsm_canopen_sdo_req *r = &l->req[head % SDO_Q];
+    r->f = *f;
+    r->rx_us = now_us;
+    r->epoch = lsm_atomic_get(&l->epoch);
+    lsm_atomic_put_release(&l->req_head, head + 1u);
+    if (waiting + 1u > l->most_waiting)
+        l->most_waiting = waiting + 1u;
+    return LSM_OK;
+}
+
+/* Tick: the server's object access (at most one is outstanding), then its responses into the TX queue. True when
+ * something was done. */
+static bool sdo_tick(lsm_canopen *n)
+{
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    const uint32_t epoch = lsm_atomic_get(&l->epoch);
+    const uint32_t done = lsm_atomic_get(&l->acc_done);
+    bool did = false;
+    if (lsm_atomic_get_acquire(&l->acc_posted) != done) {
+        if (l->acc_epoch == epoch) {
+            lsm_co_sdo_access_apply(&n->od, &l->acc, n->sdo_buf, sizeof n->sdo_buf);
+        } else { /* posted before an SDO reset: not applied */
+            l->acc.abort = LSM_CO_ABORT_DEVICE_STATE;
+            l->acc.out_len = 0u;
+            l->stale++;
+        }
+        lsm_atomic_put_release(&l->acc_done, done + 1u);
+        did = true;
+    }
+    uint32_t tail = lsm_atomic_get(&l->res_tail);
+    const uint32_t head = lsm_atomic_get_acquire(&l->res_head);
+    while (tail != head) {
+        const lsm_canopen_sdo_res *r = &l->res[tail % SDO_Q];
+        if (r->epoch != epoch)
+            l->stale++;
+        else if (!n->bus_off)                       /* bus-off: nothing is queued */
+            (void)lsm_can_txq_push(&n->txq, &r->f); /* full: dropped and counted, the client times out (as before) */
+        tail++;
+        lsm_atomic_put_release(&l->res_tail, tail);
+        did = true;
+    }
+    return did;
+}
+
+/* Background: responses the ring can take now. */
+static uint32_t sdo_res_room(lsm_canopen_sdo_link *l)
+{
+    return SDO_Q - (lsm_atomic_get(&l->res_head) - lsm_atomic_get_acquire(&l->res_tail));
+}
+
+/* Background: a response to the tick (room checked by the caller). */
+static void sdo_respond(lsm_canopen_sdo_link *l, const lsm_can_frame *f)
+{
+    const uint32_t head = lsm_atomic_get(&l->res_head);
+    lsm_canopen_sdo_res *r = &l->res[head % SDO_Q];
+    r->f = *f;
+    r->epoch = l->bg_epoch;
+    lsm_atomic_put_release(&l->res_head, head + 1u);
+}
+
+/* Background: the answer of the outstanding access, if it is back. False while it is still out. */
+static bool sdo_take_answer(lsm_canopen *n)
+{
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    if (lsm_atomic_get_acquire(&l->acc_done) != lsm_atomic_get(&l->acc_posted))
+        return false;
+    lsm_can_frame resp;
+    if (lsm_co_sdo_complete(&n->sdo, &l->acc, &resp) && l->acc_epoch == l->bg_epoch)
+        sdo_respond(l, &resp);
+    return true;
+}
+
+/* Background: the next waiting request. False when there is none. */
+static bool sdo_serve_one(lsm_canopen *n)
+{
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    const uint32_t tail = lsm_atomic_get(&l->req_tail);
+    if (lsm_atomic_get_acquire(&l->req_head) == tail)
+        return false;
+    const lsm_canopen_sdo_req rq = l->req[tail % SDO_Q];
+    lsm_atomic_put_release(&l->req_tail, tail + 1u);
+    if (rq.epoch != l->bg_epoch) {
+        if ((int32_t)(rq.epoch - l->bg_epoch) < 0) {
+            l->bg_dropped++; /* received before an SDO reset the server has already seen */
+            return true;
+        }
+        l->bg_epoch = rq.epoch;
+        lsm_co_sdo_reset(&n->sdo);
+    }
+    lsm_can_frame resp;
+    const lsm_co_sdo_step st = lsm_co_sdo_request(&n->sdo, &rq.f, rq.rx_us, &resp, &l->acc);
+    if (st == LSM_CO_SDO_STEP_RESPOND) {
+        sdo_respond(l, &resp);
+    } else if (st == LSM_CO_SDO_STEP_ACCESS) {
+        l->acc_epoch = l->bg_epoch;
+        lsm_atomic_put_release(&l->acc_posted, lsm_atomic_get(&l->acc_posted) + 1u);
+    }
+    return true;
+}
+
+bool lsm_canopen_sdo_background(lsm_canopen *n, uint32_t now_us)
+{
+    if (n == NULL || !n->sdo_link.enabled)
+        return false;
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    bool did = false;
+    const uint32_t epoch = lsm_atomic_get_acquire(&l->epoch);
+    if (epoch != l->bg_epoch) {
+        l->bg_epoch = epoch;
+        lsm_co_sdo_reset(&n->sdo);
+        did = true;
+    }
+    if (lsm_co_sdo_waiting(&n->sdo)) {
+        if (!sdo_take_answer(n))
+            return did;
+        did = true;
+    }
+    while (!lsm_co_sdo_waiting(&n->sdo) && sdo_res_room(l) > 0u && sdo_serve_one(n))
+        did = true;
+    /* the timeout after the requests: a segment received before now_us is served first, as when the tick served
+     * the requests before its timeout check */
+    lsm_can_frame resp;
+    if (!lsm_co_sdo_waiting(&n->sdo) && sdo_res_room(l) > 0u && lsm_co_sdo_timeout(&n->sdo, now_us, &resp)) {
+        sdo_respond(l, &resp);
+        did = true;
+    }
+    return did;
+}
+
+void lsm_canopen_sdo_sync(lsm_canopen *n, uint32_t now_us)
+{
+    if (n == NULL || !n->sdo_link.enabled)
+        return;
+    /* each round serves a request or an access; what a burst of received frames needs is bounded by the rings */
+    for (unsigned i = 0; i < 8u * SDO_Q; i++) {
+        const bool bg = lsm_canopen_sdo_background(n, now_us);
+        if (!sdo_tick(n) && !bg)
+            return;
+    }
+}
+
+void lsm_canopen_sdo_stats(lsm_canopen *n, uint32_t *waiting, uint32_t *most_waiting, uint32_t *refused)
+{
+    if (n == NULL)
+        return;
+    lsm_canopen_sdo_link *l = &n->sdo_link;
+    if (waiting != NULL)
+        *waiting = lsm_atomic_get(&l->req_head) - lsm_atomic_get_acquire(&l->req_tail);
+    if (most_waiting != NULL)
+        *most_waiting = l->most_waiting;
+    if (refused != NULL)
+        *refused = l->refused;
+}
+
 /* Communication objects to their defaults (the part of a reset communication). */
 static lsm_status comm_defaults(lsm_canopen *n)
 {
@@ -308,8 +519,7 @@ static lsm_status comm_defaults(lsm_canopen *n)
     n->sdo_cob_rx = 0x600u + cfg->node_id;
     n->sdo_cob_tx = 0x580u + cfg->node_id;
     n->comm_error_behaviour = 0u;
-    if ((st = lsm_co_sdo_init(&n->sdo, &n->od, cfg->node_id, n->sdo_buf, sizeof n->sdo_buf, cfg->sdo_timeout_us)) !=
-        LSM_OK)
+    if ((st = sdo_restart(n)) != LSM_OK)
         return st;
     if ((st = lsm_co_nmt_init(&n->nmt, cfg->node_id, cfg->heartbeat_ms)) != LSM_OK)
         return st;
@@ -423,6 +633,9 @@ lsm_status lsm_canopen_init(lsm_canopen *n, const lsm_canopen_config *cfg, uint3
     lsm_status st = lsm_can_txq_init(&n->txq, cfg->tx_storage, cfg->tx_cap);
     if (st != LSM_OK)
         return st;
+    n->sdo_link.enabled = cfg->sdo_background;
+    if (cfg->sdo_background && (st = sdo_init(n)) != LSM_OK) /* once: then it is the background's */
+        return st;
     return build(n, now_us, NULL);
 }
 
@@ -463,7 +676,7 @@ static void set_nmt_state(lsm_canopen *n, lsm_co_nmt_state s)
     if (s == LSM_CO_NMT_OPERATIONAL)
         lsm_co_pdo_restart(&n->pdo, n->now_us);
     if (s == LSM_CO_NMT_STOPPED)
-        lsm_co_sdo_reset(&n->sdo);
+        sdo_reset(n);
 }
 
 static void reset_comm(lsm_canopen *n)
@@ -493,7 +706,7 @@ static void reset_node_now(lsm_canopen *n)
     const lsm_co_od od = n->od;
     const lsm_co_pdo pdo_boot = n->pdo_boot;
     const bool pdo_boot_valid = n->pdo_boot_valid;
-    memset(n, 0, sizeof *n);
+    memset(n, 0, offsetof(lsm_canopen, sdo_link)); /* the SDO server and its hand-off stay (sdo_restart) */
     n->tick_stats = ts;
     n->pdo_boot = pdo_boot;
     n->pdo_boot_valid = pdo_boot_valid;
@@ -570,13 +783,13 @@ lsm_status lsm_canopen_rx(lsm_canopen *n, const lsm_can_frame *f, uint32_t now_u
             if (back & (1u << i))
                 emcy_clear(n, LSM_CO_EMCY_HEARTBEAT, (uint8_t)(n->nmt.cons[i].param >> 16));
         }
-    } else if (f->id == n->sdo.rx_id) {
+    } else if (f->id == n->sdo_cob_rx) {
         if (!sdo_ok)
             st = LSM_E_CO_NMT_STATE;
-        else
-            st = lsm_co_sdo_rx(&n->sdo, f, now_us, &n->txq);
-        if (st == LSM_E_FULL)
-            st = LSM_OK; /* the response was dropped and counted; the client will time out */
+        else if (n->sdo_link.enabled)
+            st = sdo_push(n, f, now_us);
+        else if (lsm_co_sdo_rx(&n->sdo, f, now_us, &n->txq) == LSM_E_CO_FRAME)
+            st = LSM_E_CO_FRAME; /* LSM_E_FULL: the response was dropped and counted; the client will time out */
     } else if (lsm_co_pdo_is_sync(&n->pdo, f->id)) {
         if (op) {
             st = lsm_co_pdo_sync(&n->pdo, f, now_us, &n->txq);
@@ -633,7 +846,10 @@ lsm_status lsm_canopen_process(lsm_canopen *n, uint32_t now_us)
         reset_node_now(n);
         return LSM_OK;
     }
-    lsm_co_sdo_process(&n->sdo, now_us, &n->txq);
+    if (n->sdo_link.enabled)
+        (void)sdo_tick(n);
+    else
+        lsm_co_sdo_process(&n->sdo, now_us, &n->txq);
     uint32_t lost = lsm_co_nmt_process(&n->nmt, now_us, &n->txq);
     if (lost != 0u) {
         for (size_t i = 0; i < LSM_CO_HB_CONSUMERS; i++) {

@@ -56,6 +56,8 @@
  *
  * Units: positions in counts (0x2001 counts per mm: 1000 means 1 count = 1 µm), velocity counts/s,
  * acceleration counts/s², jerk counts/s³, snap counts/s⁴, time in ms on the bus and µs in the API.
+ * Contexts: the axes are the tick's (canopen.h, "Contexts"): every call here, the object writes included (an SDO write
+ * of the controlword or a target is applied by the tick, as an access the background's SDO server posted; co_sdo.h).
  */
 #ifndef LSM_CIA402_H
 #define LSM_CIA402_H
@@ -208,16 +210,16 @@ typedef struct lsm_cia402 {
     lsm_cia402_event events[LSM_CIA402_EVENTS];
 } lsm_cia402;
 
-/* Defaults (documented in docs/canopen.md), state SWITCH ON DISABLED. Errors: LSM_E_NULL. */
+/* Defaults (documented in docs/canopen.md), state SWITCH ON DISABLED. Errors: LSM_E_NULL. Tick. */
 lsm_status lsm_cia402_init(lsm_cia402 *ax);
 
 /* OD hook for the axis objects; `index` is the instance-0 index (0x6040, 0x2001, ...). Stores the value
  * after its checks. Returns 0 or the abort code (0x06090030 unsupported enumeration value, 0x08000022
  * scaling changed while the axis is powered, 0x06020000 an index this module does not serve).
- * now_us is the time of the write (not used by the present objects). */
+ * now_us is the time of the write (not used by the present objects). Tick. */
 uint32_t lsm_cia402_od_write(lsm_cia402 *ax, uint16_t index, uint8_t sub, int64_t value, uint32_t now_us);
 
-/* Application side, each cycle. The node's context (canopen.h: the control cycle), as every call here. */
+/* Application side, each cycle. Tick (canopen.h: the node is the tick's), as every call here. */
 void lsm_cia402_update(lsm_cia402 *ax, const lsm_cia402_feedback *fb, uint32_t now_us);
 lsm_cia402_sp_event lsm_cia402_pp_fetch(lsm_cia402 *ax, lsm_cia402_setpoint *sp);
 bool lsm_cia402_pp_peek_next(const lsm_cia402 *ax, lsm_cia402_setpoint *sp);
@@ -230,12 +232,12 @@ bool lsm_cia402_in_position(const lsm_cia402 *ax);   /* in-position output */
 lsm_cia402_state lsm_cia402_get_state(const lsm_cia402 *ax);
 
 /* Faults and node events. lsm_cia402_fault: fault reaction with `code` in 0x603F (first fault wins);
- * report = true queues an EMCY raise now and a clear at the fault reset. */
+ * report = true queues an EMCY raise now and a clear at the fault reset. Tick. */
 void lsm_cia402_fault(lsm_cia402 *ax, uint16_t code, bool report);
 void lsm_cia402_set_fault_hold(lsm_cia402 *ax, bool hold);
-/* Lost connection (master heartbeat, bus-off, leaving OPERATIONAL): the 0x6007 action; fault code 0x8130. */
+/* Lost connection (master heartbeat, bus-off, leaving OPERATIONAL): the 0x6007 action; fault code 0x8130. Tick. */
 void lsm_cia402_comm_lost(lsm_cia402 *ax);
-/* Pops one EMCY event; false when none. */
+/* Pops one EMCY event; false when none. Tick. */
 bool lsm_cia402_take_event(lsm_cia402 *ax, lsm_cia402_event *ev);
 
 #endif /* LSM_CIA402_H */

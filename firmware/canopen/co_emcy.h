@@ -16,6 +16,7 @@
  * EMCY frames are only sent in PRE-OPERATIONAL and OPERATIONAL (the caller passes can_send); errors raised
  * in STOPPED or during bus-off are latched and recorded but their frame is not sent.
  * Bit 0 (generic) of the error register is set whenever any condition is active.
+ * Contexts: EMCY is the tick's (canopen.h, "Contexts"): every call here.
  */
 #ifndef LSM_CO_EMCY_H
 #define LSM_CO_EMCY_H
@@ -67,23 +68,24 @@ typedef struct lsm_co_emcy {
     uint32_t suppressed; /* frames not sent: NMT state, bus-off or full queue (wraps) */
 } lsm_co_emcy;
 
-/* Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. */
+/* Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. Tick. */
 lsm_status lsm_co_emcy_init(lsm_co_emcy *emcy, uint8_t node_id);
 
-/* Raises a condition. Returns LSM_OK (also when already active), or the txq status. */
+/* Raises a condition. Returns LSM_OK (also when already active), or the txq status. Tick. */
 lsm_status lsm_co_emcy_raise(lsm_co_emcy *emcy, uint16_t code, uint8_t reg_bits, uint8_t info, uint32_t extra,
                              bool can_send, lsm_can_txq *txq);
 
-/* Clears a condition; sends the error-reset EMCY when none is left. LSM_OK also when it was not active. */
+/* Clears a condition; sends the error-reset EMCY when none is left. LSM_OK also when it was not active. Tick. */
 lsm_status lsm_co_emcy_clear(lsm_co_emcy *emcy, uint16_t code, uint8_t info, bool can_send, lsm_can_txq *txq);
 
-/* A one-shot event: one frame (register shows reg_bits for this frame only), recorded in 0x1003. */
+/* A one-shot event: one frame (register shows reg_bits for this frame only), recorded in 0x1003. Tick. */
 lsm_status lsm_co_emcy_event(lsm_co_emcy *emcy, uint16_t code, uint8_t reg_bits, uint8_t info, uint32_t extra,
                              bool can_send, lsm_can_txq *txq);
 
+/* Tick. */
 bool lsm_co_emcy_is_active(const lsm_co_emcy *emcy, uint16_t code, uint8_t info);
 
-/* 0x1003 sub 0 write: 0 clears the history; anything else is 0x06090030. */
+/* 0x1003 sub 0 write: 0 clears the history; anything else is 0x06090030. Tick. */
 uint32_t lsm_co_emcy_write_history_count(lsm_co_emcy *emcy, int64_t value);
 
 #endif /* LSM_CO_EMCY_H */

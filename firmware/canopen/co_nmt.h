@@ -20,6 +20,8 @@
  * A heartbeat after a loss reports RESUMED. Frames with a DLC other than 1 are malformed and do not count.
  * CiA 301 forbids two consumer entries with the same node id and a non-zero time: refused with 0x06040043.
  * Time: now_us is a free-running 32-bit microsecond clock, compared wrap-safe.
+ * Contexts: NMT and heartbeats are the tick's (canopen.h, "Contexts"): every call here. An NMT state change that
+ * drops SDO transfers reaches the background's SDO server through the node's SDO epoch (canopen.h).
  */
 #ifndef LSM_CO_NMT_H
 #define LSM_CO_NMT_H
@@ -68,36 +70,36 @@ typedef struct lsm_co_nmt {
     lsm_co_hb_consumer cons[LSM_CO_HB_CONSUMERS];
 } lsm_co_nmt;
 
-/* State INITIALISING, producer period producer_ms, every consumer off. Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. */
+/* State INITIALISING, producer period producer_ms, every consumer off. Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. Tick. */
 lsm_status lsm_co_nmt_init(lsm_co_nmt *nmt, uint8_t node_id, uint16_t producer_ms);
 
 /* Sends the boot-up frame (0x700 + id, one byte 0x00), enters PRE-OPERATIONAL, restarts the heartbeat
- * timer and re-arms every configured consumer (WAITING). Returns the txq push status. */
+ * timer and re-arms every configured consumer (WAITING). Returns the txq push status. Tick. */
 lsm_status lsm_co_nmt_boot(lsm_co_nmt *nmt, uint32_t now_us, lsm_can_txq *txq);
 
 /* Decodes an NMT command frame (id 0x000). Returns the command when it addresses this node and is known,
- * else LSM_CO_NMT_CMD_NONE; *st is LSM_E_CO_FRAME for a malformed frame (DLC != 2, RTR), else LSM_OK. */
+ * else LSM_CO_NMT_CMD_NONE; *st is LSM_E_CO_FRAME for a malformed frame (DLC != 2, RTR), else LSM_OK. Tick. */
 lsm_co_nmt_cmd lsm_co_nmt_decode(lsm_co_nmt *nmt, const lsm_can_frame *f, lsm_status *st);
 
-/* Sets the state (the node calls it after deciding how to apply a command). */
+/* Sets the state (the node calls it after deciding how to apply a command). Tick. */
 void lsm_co_nmt_set_state(lsm_co_nmt *nmt, lsm_co_nmt_state state);
 
-/* 0x1017 write: new period (0 = off); the next heartbeat is due one period from now. */
+/* 0x1017 write: new period (0 = off); the next heartbeat is due one period from now. Tick. */
 void lsm_co_nmt_set_producer(lsm_co_nmt *nmt, uint16_t period_ms, uint32_t now_us);
 
 /* 0x1016 sub (i + 1) write. Returns 0 or an abort code (0x06090030 bits 24..31 set or node id > 127,
- * 0x06040043 same node id as another active entry). The entry restarts in WAITING. */
+ * 0x06040043 same node id as another active entry). The entry restarts in WAITING. Tick. */
 uint32_t lsm_co_nmt_set_consumer(lsm_co_nmt *nmt, size_t i, uint32_t param);
 
-/* True if f->id is 0x700 + the node id of an enabled consumer entry. */
+/* True if f->id is 0x700 + the node id of an enabled consumer entry. Tick. */
 bool lsm_co_nmt_is_consumed(const lsm_co_nmt *nmt, uint32_t id);
 
 /* Serves a heartbeat frame from a monitored node. Returns a bit mask of the consumer entries that were
- * LOST and are ACTIVE again (bit i = entry i); *st is LSM_E_CO_FRAME for a DLC other than 1. */
+ * LOST and are ACTIVE again (bit i = entry i); *st is LSM_E_CO_FRAME for a DLC other than 1. Tick. */
 uint32_t lsm_co_nmt_rx_heartbeat(lsm_co_nmt *nmt, const lsm_can_frame *f, uint32_t now_us, lsm_status *st);
 
 /* Sends the heartbeat when due and checks the consumers. Returns a bit mask of the entries that timed out
- * in this call (each loss is reported once). */
+ * in this call (each loss is reported once). Tick. */
 uint32_t lsm_co_nmt_process(lsm_co_nmt *nmt, uint32_t now_us, lsm_can_txq *txq);
 
 #endif /* LSM_CO_NMT_H */

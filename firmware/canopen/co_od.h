@@ -22,6 +22,9 @@
  * Byte order: values travel little-endian (CiA 301 §7.1.2); storage is the native C type of the entry
  * (uint8_t for BOOLEAN, int16_t for INTEGER16, float for REAL32, ...), accessed with memcpy.
  * No allocation, no globals: the dictionary is a small struct that points to the caller's table and base.
+ * Contexts: the dictionary belongs to the tick (the control cycle; canopen.h, "Contexts"): every value it
+ * addresses is written by the tick only. The background's SDO server never calls it: it posts accesses that the tick
+ * applies (co_sdo.h, lsm_co_sdo_access_apply). Each call below names its context.
  */
 #ifndef LSM_CO_OD_H
 #define LSM_CO_OD_H
@@ -147,36 +150,37 @@ typedef struct lsm_co_od {
  * match the type, value outside base, CONST that is writable or wider than 32 bits, PDO flag without the
  * matching access, range on a non-numeric entry or min > max, group without instances, HOOK entry without
  * a hook, a (index, sub-index) served twice, DOMAIN that is not a write-only hooked entry).
+ * Before the tick and the background run (lsm_canopen_init).
  */
 lsm_status lsm_co_od_init(lsm_co_od *od, const lsm_co_od_config *cfg);
 
-/* Bytes of a numeric type (1, 2, 4 or 8), 0 for strings, domains and unknown types. */
+/* Bytes of a numeric type (1, 2, 4 or 8), 0 for strings, domains and unknown types. Any context (pure). */
 size_t lsm_co_od_type_size(uint8_t type);
 
-/* True for the signed integer types. */
+/* True for the signed integer types. Any context (pure). */
 bool lsm_co_od_type_signed(uint8_t type);
 
-/* Finds (index, sub). Returns 0 with *ref filled, LSM_CO_ABORT_NO_OBJECT or LSM_CO_ABORT_NO_SUB. */
+/* Finds (index, sub). Returns 0 with *ref filled, LSM_CO_ABORT_NO_OBJECT or LSM_CO_ABORT_NO_SUB. Tick. */
 uint32_t lsm_co_od_find(const lsm_co_od *od, uint16_t index, uint8_t sub, lsm_co_od_ref *ref);
 
 /* Builds the reference of instance `inst` of table entry number `entry` (as cached by PDO mappings).
- * Returns 0, or LSM_CO_ABORT_NO_OBJECT when entry or inst is out of range. */
+ * Returns 0, or LSM_CO_ABORT_NO_OBJECT when entry or inst is out of range. Tick. */
 uint32_t lsm_co_od_ref_at(const lsm_co_od *od, size_t entry, uint8_t inst, lsm_co_od_ref *ref);
 
-/* Bytes a read of ref yields now (the type size; the current length for strings). */
+/* Bytes a read of ref yields now (the type size; the current length for strings). Tick. */
 size_t lsm_co_od_read_size(const lsm_co_od_ref *ref);
 
-/* Reads the value into buf (little-endian). 0, LSM_CO_ABORT_WRITE_ONLY or LSM_CO_ABORT_NO_MEM (cap too small). */
+/* Reads the value into buf (little-endian). 0, LSM_CO_ABORT_WRITE_ONLY or LSM_CO_ABORT_NO_MEM (cap too small). Tick. */
 uint32_t lsm_co_od_read(const lsm_co_od *od, const lsm_co_od_ref *ref, uint8_t *buf, size_t cap, size_t *len);
 
-/* Writes len little-endian bytes with every check described above. Returns 0 or the abort code. */
+/* Writes len little-endian bytes with every check described above. Returns 0 or the abort code. Tick. */
 uint32_t lsm_co_od_write(lsm_co_od *od, const lsm_co_od_ref *ref, const uint8_t *data, size_t len);
 
-/* The default store of a numeric value (for hooks): copies data (the entry's size) into ref's storage. */
+/* The default store of a numeric value (for hooks): copies data (the entry's size) into ref's storage. Tick. */
 void lsm_co_od_store(const lsm_co_od_ref *ref, const uint8_t *data);
 
 /* Convenience for applications and tests: read / write a numeric object by address, as int64
- * (UNSIGNED64 as its bit pattern). Same checks and abort codes as the SDO path. */
+ * (UNSIGNED64 as its bit pattern). Same checks and abort codes as the SDO path. Tick. */
 uint32_t lsm_co_od_get_int(const lsm_co_od *od, uint16_t index, uint8_t sub, int64_t *value);
 uint32_t lsm_co_od_set_int(lsm_co_od *od, uint16_t index, uint8_t sub, int64_t value);
 

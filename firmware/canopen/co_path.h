@@ -50,6 +50,9 @@
  *
  * Epoch: each clear (and each block the planner refuses) increments `epoch`; the application drops the
  * blocks it took from the buffer under an older epoch.
+ * Contexts: the path buffer is the tick's (canopen.h, "Contexts"): every call here. A 0x5010 block sent by SDO is
+ * collected by the background's SDO server and appended by the tick when it applies the server's write access
+ * (co_sdo.h), so the buffer has one writer; the motion layer's background gets the blocks through mpipe.h.
  */
 #ifndef LSM_CO_PATH_H
 #define LSM_CO_PATH_H
@@ -137,35 +140,35 @@ typedef struct lsm_co_path {
 } lsm_co_path;
 
 /* Binds the buffer storage[cap] (1..65535 blocks) for n_axes axes. State IDLE, last sequence 0 (the first
- * block is 1), override 100 %. Errors: LSM_E_NULL, LSM_E_ARG (cap), LSM_E_CO_AXES. */
+ * block is 1), override 100 %. Errors: LSM_E_NULL, LSM_E_ARG (cap), LSM_E_CO_AXES. Tick. */
 lsm_status lsm_co_path_init(lsm_co_path *p, lsm_co_path_block *storage, size_t cap, uint8_t n_axes);
 
 /* Decodes a block and checks what does not depend on the buffer (format, enumerations, feed, tolerance, end
- * radius of arcs). No state change. Returns 0 or the abort code; *b filled on success. */
+ * radius of arcs). No state change. Returns 0 or the abort code; *b filled on success. Tick. */
 uint32_t lsm_co_path_decode(const lsm_co_path *p, const uint8_t *data, size_t len, lsm_co_path_block *b);
 
 /* 0x5010 write. Returns 0 (stored or duplicate) or the abort code. *st (may be NULL) tells LSM_OK,
- * LSM_E_CO_SEQ_DUP, LSM_E_CO_SEQ_GAP, LSM_E_FULL, LSM_E_CO_BLOCK or LSM_E_STATE. */
+ * LSM_E_CO_SEQ_DUP, LSM_E_CO_SEQ_GAP, LSM_E_FULL, LSM_E_CO_BLOCK or LSM_E_STATE. Tick. */
 uint32_t lsm_co_path_write_block(lsm_co_path *p, const uint8_t *data, size_t len, lsm_status *st);
 
-/* 0x5000 write; axes_ready: every axis may run path motion now. Returns 0 or the abort code. */
+/* 0x5000 write; axes_ready: every axis may run path motion now. Returns 0 or the abort code. Tick. */
 uint32_t lsm_co_path_command(lsm_co_path *p, int64_t cmd, bool axes_ready);
 
-/* 0x5004 write (resync). Returns 0 or 0x08000022. */
+/* 0x5004 write (resync). Returns 0 or 0x08000022. Tick. */
 uint32_t lsm_co_path_resync(lsm_co_path *p, uint32_t last_seq);
 
-/* Node: a fault or stop of the axes holds a running path with a quick stop. */
+/* Node: a fault or stop of the axes holds a running path with a quick stop. Tick. */
 void lsm_co_path_hold(lsm_co_path *p, bool quick);
 
-/* Application side. The node's context (canopen.h: the control cycle), as every call here. */
+/* Application side. Tick (canopen.h: the node is the tick's), as every call here. */
 lsm_co_path_motion lsm_co_path_get_motion(const lsm_co_path *p);
 size_t lsm_co_path_count(const lsm_co_path *p);
-/* i-th queued block, 0 = oldest (look-ahead without consuming). False when i >= count. */
+/* i-th queued block, 0 = oldest (look-ahead without consuming). False when i >= count. Tick. */
 bool lsm_co_path_peek(const lsm_co_path *p, size_t i, lsm_co_path_block *b);
-/* Takes the oldest block out of the buffer. LSM_E_EMPTY when none. */
+/* Takes the oldest block out of the buffer. LSM_E_EMPTY when none. Tick. */
 lsm_status lsm_co_path_pop(lsm_co_path *p, lsm_co_path_block *b);
 void lsm_co_path_update(lsm_co_path *p, const lsm_co_path_report *r);
-/* The planner refused block seq (geometry it cannot run): quick stop, buffer flushed, EMCY 0xFF01. */
+/* The planner refused block seq (geometry it cannot run): quick stop, buffer flushed, EMCY 0xFF01. Tick. */
 void lsm_co_path_reject(lsm_co_path *p, uint32_t seq);
 
 #endif /* LSM_CO_PATH_H */

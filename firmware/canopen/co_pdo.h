@@ -32,6 +32,8 @@
  *
  * PDOs only run in NMT OPERATIONAL; the node calls these functions accordingly.
  * Time: now_us is a free-running 32-bit microsecond clock, compared wrap-safe.
+ * Contexts: PDOs are the tick's (SYNC and PDO timing are the control cycle's work; canopen.h, "Contexts"): every call
+ * here, including the mapping hooks an SDO write reaches (the tick applies the background server's accesses).
  */
 #ifndef LSM_CO_PDO_H
 #define LSM_CO_PDO_H
@@ -84,40 +86,41 @@ typedef struct lsm_co_pdo {
 } lsm_co_pdo;
 
 /* Every PDO not valid with its default COB-ID, type 255, no mapping; SYNC COB-ID 0x80.
- * Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. */
+ * Errors: LSM_E_NULL, LSM_E_CO_NODE_ID. Tick. */
 lsm_status lsm_co_pdo_init(lsm_co_pdo *pdo, lsm_co_od *od, uint8_t node_id);
 
 /*
  * Application default configuration of one PDO (tx: TPDO, else RPDO; k its number): the mapping maps[0..n-1],
  * the transmission type, and whether it is valid with its default COB-ID. Goes through the same checks as the
  * SDO procedure. Errors: LSM_E_ARG (k, n or type out of range), LSM_E_CO_MAPPING (an entry is refused).
+ * Tick.
  */
 lsm_status lsm_co_pdo_configure(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t trans_type, const uint32_t *maps, size_t n,
                                 bool valid);
 
-/* OD hook parts: communication record (sub 1, 2, 3, 5), mapping record (sub 0..8), 0x1005. Abort or 0. */
+/* OD hook parts: communication record (sub 1, 2, 3, 5), mapping record (sub 0..8), 0x1005. Abort or 0. Tick. */
 uint32_t lsm_co_pdo_write_comm(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t sub, uint32_t value, uint32_t now_us);
 uint32_t lsm_co_pdo_write_map(lsm_co_pdo *pdo, bool tx, size_t k, uint8_t sub, uint32_t value);
 uint32_t lsm_co_pdo_write_sync_id(lsm_co_pdo *pdo, uint32_t value);
 
-/* Number of the valid RPDO listening on id, or -1. */
+/* Number of the valid RPDO listening on id, or -1. Tick. */
 int lsm_co_pdo_rpdo_of(const lsm_co_pdo *pdo, uint32_t id);
 
-/* True if id is the SYNC COB-ID. */
+/* True if id is the SYNC COB-ID. Tick. */
 bool lsm_co_pdo_is_sync(const lsm_co_pdo *pdo, uint32_t id);
 
-/* Serves one frame of RPDO k. */
+/* Serves one frame of RPDO k. Tick. */
 lsm_co_pdo_rx_result lsm_co_pdo_rx(lsm_co_pdo *pdo, size_t k, const lsm_can_frame *f);
 
 /* A SYNC frame: LSM_E_CO_FRAME if its DLC is not 0 (nothing done), else sends the synchronous TPDOs due,
- * then applies the synchronous RPDOs received since the last SYNC. */
+ * then applies the synchronous RPDOs received since the last SYNC. Tick. */
 lsm_status lsm_co_pdo_sync(lsm_co_pdo *pdo, const lsm_can_frame *f, uint32_t now_us, lsm_can_txq *txq);
 
-/* Event-driven TPDOs (types 254/255): change of mapped data, inhibit time, event timer. */
+/* Event-driven TPDOs (types 254/255): change of mapped data, inhibit time, event timer. Tick. */
 void lsm_co_pdo_process(lsm_co_pdo *pdo, uint32_t now_us, lsm_can_txq *txq);
 
 /* Forgets runtime state (pending synchronous RPDO data, last TPDO data, counters): the node calls it when
- * it enters OPERATIONAL so that every event TPDO is sent once at the start. */
+ * it enters OPERATIONAL so that every event TPDO is sent once at the start. Tick. */
 void lsm_co_pdo_restart(lsm_co_pdo *pdo, uint32_t now_us);
 
 #endif /* LSM_CO_PDO_H */

@@ -29,7 +29,9 @@
  * (lsm_slcan.bitrate_code) and does not use it.
  *
  * Contexts: one lsm_slcan belongs to one context (it is not shared); everything here is pure computation on
- * caller-owned memory (no allocation, no global state), so it may run in an interrupt or in the background.
+ * caller-owned memory (no allocation, no global state), so it may run in an interrupt or in the background. In the
+ * controller application (ctl_app.h) the link's parser and encoder are the tick's: it parses the received lines and
+ * sends the node's frames; SDO requests among them go to the background's SDO server through the node (canopen.h).
  * Units: none (characters, CAN identifiers).
  */
 #ifndef LSM_SLCAN_H

@@ -61,14 +61,17 @@
  * while it decelerates only joins at speed if the planner verified that it still can from the interpolator's
  * commitment point; else the junction is an exact stop).
  *
- * Contexts. lsm_interp_step is the control cycle (tick); lsm_interp_prepare, hold, resume and the override are the
- * background, which owns the planner. The step writes nothing of the planner's: what it used to set there (the
- * blocks it is done with, its commitment horizon, the acknowledgement of a stale piece) it posts as requests
- * (planner.h, lsm_planner_req: single writer, sequence counter), which the background applies at the start of
- * its next planner call. Not finished (issue 13): the step still reads the planner's tail, gen and blocks and the
- * prepared slot, and the background reads the step's cursor and pieces, without a hand-off, and the step plans a
- * piece itself when none is prepared; so today both must run in one context, or the background must not be
- * preempted by the step (a synchronous loop: prepare, then step).
+ * Contexts. The interpolator and its planner are one context's (planner.h): lsm_interp_step, lsm_interp_prepare,
+ * hold, resume and the override run in turn, never preempting each other. On a controller that is the background
+ * (motion.h: the step runs lead_cycles ahead of the tick, whose hand-off is a ring of finished setpoints, mpipe.h);
+ * in a synchronous loop (host simulator, the contour image) the cycle steps after the cycle's background work.
+ * The step writes nothing of the planner's directly: what it used to set there (the blocks it is done with, its
+ * commitment horizon, the acknowledgement of a stale piece) it posts as requests (planner.h, lsm_planner_req:
+ * single writer, sequence counter), which the next planner call applies. It still reads the planner's tail, gen,
+ * blocks and the prepared slot, and lsm_interp_prepare reads the step's cursor and pieces, with no hand-off of their
+ * own: that is why a step may not preempt the background's calls on the same interpolator, and why the motion layer
+ * moves the whole interpolator to the background rather than splitting it. A step that reaches a switch point with
+ * no piece prepared plans it itself (tick_plans; 0 when lsm_interp_prepare runs before every step).
  *
  * Units: mm, s, rad.
  */
@@ -166,7 +169,9 @@ typedef struct lsm_interp {
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */
 lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl);
 
-/* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. Control cycle. */
+/* One control cycle: writes LSM_MAX_AXES positions (mm, rad) and returns the state after the cycle. The context
+ * that owns the interpolator (above: the background on a controller, running ahead of the tick; the cycle in a
+ * synchronous loop). */
 lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
 
 /* Background work between cycles: plans the next piece the interpolator will need (see above). Returns LSM_OK (a

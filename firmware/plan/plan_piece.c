@@ -14,6 +14,10 @@
 #define STAIR_LEVEL_RATIO LSM_R(0.6)
 #define STAIR_MIN_STEP LSM_R(0.02)
 #define STAIR_MIN_GAIN_CYCLES LSM_R(2.0)
+/* A staircase candidate is skipped before it is planned when even its bound on the gain (stair_may_gain) falls short
+ * by more than this slack: half a cycle, plus a relative share of the times for their rounding. */
+#define STAIR_PRUNE_SLACK_CYCLES LSM_R(0.5)
+#define STAIR_PRUNE_SLACK_REL LSM_R(1e-4)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* pieces                                                                                                       */
@@ -267,20 +271,97 @@ static bool best_after_step(pctx *sub, lsm_real vc, lsm_real vmax, lsm_real v1, 
     return true;
 }
 
+/* The highest tangential a, j and snap of any verified ramp on the piece: a ramp passes its check only where its
+ * peaks are within the budgets of every block it crosses (plan_ramp.c, check_span), and each budget is at most the
+ * block's at rest (1 / alpha_a, 1 / alpha_j, 1 / alpha_s: the speed terms only take from it). A block with a
+ * coefficient 0 does not bound that quantity: it is then unbounded (0 here). */
+typedef struct ramp_tops {
+    lsm_real a, j, s; /* 0: unbounded */
+} ramp_tops;
+
+static lsm_real top_of(lsm_real coef_max_inv, bool unbounded)
+{
+    return unbounded || !(coef_max_inv > R0) ? R0 : R1 / coef_max_inv;
+}
+
+static void piece_tops(const pctx *pc, ramp_tops *t)
+{
+    lsm_real aa = LSM_REAL_MAX, aj = LSM_REAL_MAX, as = LSM_REAL_MAX; /* the smallest coefficients */
+    for (uint32_t id = pc->id0; id != pc->id_end; id++) {
+        coef c;
+        coef_get(blk(pc->pl, id), &c);
+        aa = lsm_min2(aa, c.aa);
+        aj = lsm_min2(aj, c.aj);
+        as = lsm_min2(as, c.as);
+    }
+    t->a = top_of(aa, aa == LSM_REAL_MAX);
+    t->j = top_of(aj, aj == LSM_REAL_MAX);
+    t->s = top_of(as, as == LSM_REAL_MAX);
+}
+
+/* A lower bound of the time of a velocity change by dv that starts and ends with a = j = 0 within the peaks t
+ * (a ramp): dv <= a T; dv <= j T² / 4 (|a| <= j min(t, T - t)); dv <= s T³ / 24 (|j| <= s min(t, T - t) and
+ * dv = the integral of (T/2 - t) j dt). */
+static lsm_real ramp_time_min(lsm_real dv, const ramp_tops *t)
+{
+    lsm_real T = R0;
+    if (!(dv > R0))
+        return T;
+    if (t->a > R0)
+        T = lsm_max2(T, dv / t->a);
+    if (t->j > R0)
+        T = lsm_max2(T, LSM_R(2.0) * lsm_sqrt(dv / t->j));
+    if (t->s > R0)
+        T = lsm_max2(T, lsm_cbrt(LSM_R(24.0) * dv / t->s));
+    return T;
+}
+
+/* The least time a ramp u -> w (u < w <= vmax) loses against travelling its distance at vmax: T (2 vmax - u - w) /
+ * (2 vmax), its distance being (u + w) T / 2. */
+static lsm_real ramp_loss_min(lsm_real u, lsm_real w, lsm_real vmax, const ramp_tops *t)
+{
+    return ramp_time_min(w - u, t) * (LSM_R(2.0) * vmax - u - w) / (LSM_R(2.0) * vmax);
+}
+
+/* Could a staircase whose gain is at most `bound` beat `need`? The bound holds in exact arithmetic (every speed of
+ * a candidate is at most vmax, and a sin² ramp's time is 2 dist / (v_a + v_b) >= dist / vmax); the slack covers
+ * the rounding of the times (t: their size) and of the positions (x: the length compared, an exact end within
+ * LEN_EPS of it), so that a candidate skipped here would also have been rejected after planning it. */
+static bool stair_may_gain(lsm_real bound, lsm_real need, lsm_real dt, lsm_real t, lsm_real x, lsm_real vmax)
+{
+    const lsm_real slack = STAIR_PRUNE_SLACK_CYCLES * dt + STAIR_PRUNE_SLACK_REL * lsm_fabs(t) +
+                           LSM_R(4.0) * LEN_EPS * (R1 + lsm_fabs(x)) / vmax;
+    return bound + slack > need;
+}
+
 /* One staircase candidate: a first ramp v0 -> vc, then, re-planned from its end, a second one up to best's cruise.
  * Taken into *found when it reaches that cruise (or the end of best's ramp A, xe) sooner than best by more than
  * *gain. With to_end, the second piece is the best one from the end of the first ramp (it need not reach best's
  * cruise) and the two are compared over the whole piece. */
-static void try_step(pctx *pc, const plan5 *best, lsm_real vc, bool exact, bool to_end, lsm_real *gain, plan5 *found,
-                     bool *have)
+static void try_step(pctx *pc, const ramp_tops *tops, const plan5 *best, lsm_real vc, bool exact, bool to_end,
+                     lsm_real *gain, plan5 *found, bool *have)
 {
     const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real v0 = best->v0, vmax = best->vc, xe = best->xA + best->A.dist;
+    const lsm_real need = *gain + STAIR_MIN_GAIN_CYCLES * dt; /* the gain to beat */
+    /* best's time to where it is compared (xe, or the end of the piece): no candidate can gain more than what best
+     * loses there against running at vmax all the way, less what the candidate's own ramps lose at least (the
+     * first step v0 -> vc; without to_end also the second ramp vc -> vmax, which ends before xe) */
+    const lsm_real t_best = to_end ? plan_time(best, dt, pc->D) : time_to(best, dt, xe);
+    const lsm_real x_cmp = to_end ? pc->D : xe;
+    const lsm_real loss2 = to_end ? R0 : ramp_loss_min(vc, vmax, vmax, tops);
+    const lsm_real loss1 = ramp_loss_min(v0, vc, vmax, tops);
+    if (!stair_may_gain(t_best - x_cmp / vmax - loss1 - loss2, need, dt, t_best, x_cmp, vmax))
+        return;
     plan5 p, q;
     if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
         return;
     const lsm_real x1 = p.xA + p.A.dist;
     if (!(x1 < best->xB))
+        return;
+    /* with the first step known: the second piece needs at least (x_cmp - x1) / vmax */
+    const lsm_real t1 = time_to(&p, dt, x1);
+    if (!stair_may_gain(t_best - t1 - (x_cmp - x1) / vmax - loss2, need, dt, t_best + t1, x_cmp, vmax))
         return;
     /* the second ramp, from the end of the first one */
     lsm_pl_seek(pc, x1);
@@ -337,6 +418,8 @@ static void staircase(pctx *pc, plan5 *best)
     if (!(best->xA > R0) && best->A.a_lim >= STAIR_UNSLOWED * na && best->A.j_lim >= STAIR_UNSLOWED * nj)
         return;
     const bool exact = !(best->v1 > R0);
+    ramp_tops tops;
+    piece_tops(pc, &tops);
     lsm_real gain = R0;
     plan5 found;
     memset(&found, 0, sizeof found);
@@ -347,7 +430,7 @@ static void staircase(pctx *pc, plan5 *best)
         const lsm_real vc = v0 + dv;
         if (!(vc > v0 * (R1 + STAIR_MIN_STEP)))
             break;
-        try_step(pc, best, vc, exact, false, &gain, &found, &have);
+        try_step(pc, &tops, best, vc, exact, false, &gain, &found, &have);
     }
     if (best->xA > R0) {
         /* the caps of the lead cruise, from its end back to the start: each new lower minimum is a level */
@@ -361,7 +444,7 @@ static void staircase(pctx *pc, plan5 *best)
                 m = c;
                 if (!(m > v0 * (R1 + STAIR_MIN_STEP)))
                     break;
-                try_step(pc, best, m, exact, true, &gain, &found, &have);
+                try_step(pc, &tops, best, m, exact, true, &gain, &found, &have);
                 levels++;
             }
             if (id == pc->id0)

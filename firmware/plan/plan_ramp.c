@@ -486,6 +486,16 @@ static int tune_ramp(pctx *pc, ramp *r, lsm_real v0, lsm_real v1, bool anchor_en
     return 0;
 }
 
+/* After a move of the ramp: its limits raised to at least a, j, s (the budgets at rest where it now starts). r was
+ * planned with its own limits (lsm_pl_ramp_plan keeps them): when none is raised, r is already that plan and the
+ * sizing is not repeated. */
+static bool replan_at_least(ramp *r, lsm_real dt, lsm_real a, lsm_real j, lsm_real s)
+{
+    if (!(a > r->a_lim) && !(j > r->j_lim) && !(s > r->s_lim))
+        return true;
+    return lsm_pl_ramp_plan(r, dt, r->v0, r->v1, lsm_max2(a, r->a_lim), lsm_max2(j, r->j_lim), lsm_max2(s, r->s_lim));
+}
+
 /*
  * Decelerating ramp v0 -> v1 (v0 > v1) on [X0, X1]: placed as late as it verifies, ending at X1 exactly when
  * `exact`. Region checks: lead cruise at v0 on [X0, start] (if check_lead), trail cruise at v1 on [end, X1].
@@ -510,7 +520,8 @@ bool lsm_pl_fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
             xs = xe - r->dist;
             if (exact || c.vcap < v1 * (R1 - CAP_SLACK) || c.vx0 <= xs)
                 return false;
-            lsm_real nxs = c.vx0 - ramp_pos_at_speed(r, dt, c.vcap);
+            /* (the same block again: the position at its cap would be discarded, not computed) */
+            lsm_real nxs = c.vx0 == last_vx ? xs : c.vx0 - ramp_pos_at_speed(r, dt, c.vcap);
             if (c.vx0 == last_vx || !(nxs < xs))
                 nxs = c.vx0 - r->dist; /* end the ramp before the block */
             if (!(nxs < xs))
@@ -518,7 +529,7 @@ bool lsm_pl_fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
             last_vx = c.vx0;
             xe = nxs + r->dist;
             lsm_pl_guess_limits(pc, xe, &a, &j, &s);
-            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(a, r->a_lim), lsm_max2(j, r->j_lim), lsm_max2(s, r->s_lim)))
+            if (!replan_at_least(r, dt, a, j, s))
                 return false;
             continue;
         }
@@ -556,7 +567,7 @@ bool lsm_pl_fit_accel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
                 return false;
             /* move the start so that the ramp reaches the cap at the block's end; if the same block is hit again
              * (the sub-interval bound is coarser than the ramp), start after the block */
-            lsm_real nxs = c.vx1 - ramp_pos_at_speed(r, dt, c.vcap);
+            lsm_real nxs = c.vx1 == last_vx ? xs : c.vx1 - ramp_pos_at_speed(r, dt, c.vcap);
             if (c.vx1 == last_vx || !(nxs > xs))
                 nxs = c.vx1;
             if (!(nxs > xs))
@@ -564,7 +575,7 @@ bool lsm_pl_fit_accel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
             last_vx = c.vx1;
             xs = nxs;
             lsm_pl_guess_limits(pc, xs, &a, &j, &s);
-            if (!lsm_pl_ramp_plan(r, dt, v0, v1, lsm_max2(a, r->a_lim), lsm_max2(j, r->j_lim), lsm_max2(s, r->s_lim)))
+            if (!replan_at_least(r, dt, a, j, s))
                 return false;
             continue;
         }

@@ -71,12 +71,16 @@
  *    whole-cycle ramps change shape with the speed), so a W says nothing of the speeds below it: a piece arrives
  *    at a node below its W only at a speed that passed W's own test, the forward search always tries, last, the
  *    piece the node's certificate verified, and the backward pass keeps an old W only if it still passes its test.
- *  - Contexts. The planner belongs to the background (appends, lsm_interp_prepare): every call below says which
- *    context may call it. The control cycle (lsm_interp_step) reads the blocks of its piece and writes nothing
- *    of the planner's: it posts requests (lsm_planner_req: the blocks it is done with, its commitment horizon,
- *    the piece invalidation it has seen) under a sequence counter, and the background applies them at the start
- *    of its next call. Not yet done (issue 13): the cycle still reads head, tail, gen and the blocks without a
- *    hand-off (the background appends and trims them), so the two may not yet preempt each other (interp.h).
+ *  - Contexts. The planner and its interpolator (interp.h) are one context's: the appends, lsm_interp_prepare
+ *    and lsm_interp_step run in turn, never preempting each other. On a controller that context is the
+ *    background: the motion layer (motion.h) runs lsm_interp_step lead_cycles ahead of the control cycle and
+ *    hands the finished setpoints to the tick through a single-producer ring (mpipe.h), so the tick never
+ *    reads the planner. In a synchronous loop (the host simulator, the contour image in lock-step) the cycle
+ *    calls lsm_interp_step itself, after the background's work of the cycle. The step writes nothing of the
+ *    planner's directly: it posts requests (lsm_planner_req: the blocks it is done with, its commitment
+ *    horizon, the piece invalidation it has seen) under a sequence counter, which the next planner call
+ *    applies; but it reads head, tail, gen and the blocks with no hand-off of their own, so a step may not
+ *    preempt an append or lsm_interp_prepare on the same planner (docs/architecture.md, "Contexts").
  *  - The control cycle does not plan: pieces are planned ahead by lsm_interp_prepare (interp.h).
  *    Hence a buffer underrun is a clean, verified stop on the path, and the interpolator starts again by itself
  *    when blocks are appended behind it.

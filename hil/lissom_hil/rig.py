@@ -147,7 +147,7 @@ class Rig:
         return self
 
     def _tick_stats(self, node):
-        return [node.sdo[0x5F00][i].raw for i in range(1, 9)]
+        return [node.sdo[0x5F00][i].raw for i in range(1, 11)]
 
     def _measure_time_scale(self, span_s=1.0):
         """Real seconds per node second, from the image's clock (0x5F00 sub 6, ms) over span_s of real time."""
@@ -192,8 +192,8 @@ class Rig:
             return
         self.tick_stats = {"ticks": st[0], "overruns": st[1], "worst_tick_instructions": st[2],
                            "background_load_permille": st[3], "late_wakes": st[4], "clock_ms": st[5],
-                           "path_underruns": st[6], "path_min_ahead": st[7],
-                           "tick_budget_instructions": 168000,
+                           "path_underruns": st[6], "path_min_ahead": st[7], "sdo_waiting_max": st[8],
+                           "sdo_refused": st[9], "tick_budget_instructions": 168000,
                            "time_scale": self.time_scale}
         os.makedirs(self.cfg.out_dir, exist_ok=True)
         with open(os.path.join(self.cfg.out_dir, "tick_stats.json"), "w") as f:
@@ -290,9 +290,9 @@ class Rig:
         """The M4 image's tick statistics (0x5F00) as a dict; None on other nodes."""
         if self.cfg.kind != "mcu":
             return None
-        st = [self.read(0x5F00, i) for i in range(1, 9)]
+        st = [self.read(0x5F00, i) for i in range(1, 11)]
         return dict(zip(("ticks", "overruns", "worst_tick_instructions", "background_load_permille", "late_wakes",
-                         "clock_ms", "path_underruns", "path_min_ahead"), st))
+                         "clock_ms", "path_underruns", "path_min_ahead", "sdo_waiting_max", "sdo_refused"), st))
 
     def node_heartbeat_period(self, state=None, intervals=12, timeout=30.0):
         """The M4 image's heartbeat period in its own clock (s): waits for a heartbeat (state byte `state`, None:

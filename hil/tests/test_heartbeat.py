@@ -7,7 +7,10 @@ import pytest
 from lissom_hil.checks import stop_violations
 
 MASTER_ID = 0x10
-CONSUMER_MS = 200
+# Consumer time: 1 s. The master's heartbeats (every 50 ms) came up to 0.56 s apart in a guest beside a CPU hog
+# (docs/reliability.md, test_fault_master_lost_mid_path); a 200 ms consumer then lost the master before the test
+# stopped it. The move (200 mm at 80 mm/s) is still under way when the deliberate loss is detected.
+CONSUMER_MS = 1000
 QS = dict(quick_decel=1500.0, j=30000.0, snap=3e6)
 
 
@@ -16,7 +19,7 @@ def test_heartbeat_loss(rig):
     nid = rig.node_id
     m0 = rig.frames.mark()
     rig.start_heartbeat(MASTER_ID, 0.05)
-    rig.write(0x1016, (MASTER_ID << 16) | CONSUMER_MS, sub=1)  # monitor the master, 200 ms
+    rig.write(0x1016, (MASTER_ID << 16) | CONSUMER_MS, sub=1)  # monitor the master
     rig.operational()
     rig.enable(0, "PROFILED POSITION")
     rig.set_profile(0, v=80.0, a=800.0, snap=3e6, profile_type=1, j=30000.0, quick_decel=QS["quick_decel"])
@@ -28,19 +31,17 @@ def test_heartbeat_loss(rig):
     rig.wait_moving(0, 20000)  # 20 mm under way
     c = rig.clock_start()
     rig.stop_heartbeat()
-    t_stop = time.monotonic()
     last_hb = rig.frames.select(lambda f: f.id == 0x700 + MASTER_ID, m)[-1].t
-    e = rig.frames.wait_emcy(nid, 0x8130, 2.0, m)
+    e = rig.frames.wait_emcy(nid, 0x8130, 10.0, m)
     assert e is not None, "no heartbeat EMCY"
     assert e.info == MASTER_ID
     late = (e.t - last_hb) / rig.clock_scale(c)  # in the node's clock (the M4 image's runs slower: docs/cortex_m.md)
     # (upper bound: the consumer time, plus the node's cycle and scheduling under emulation)
     assert CONSUMER_MS / 1000 * 0.9 <= late <= CONSUMER_MS / 1000 + 0.3, "EMCY %.3f s after the last heartbeat" % late
-    assert rig.wait_heartbeat(0x7F, 1.0, m) is not None, "node did not go to PRE-OPERATIONAL"
-    # quick stop (0x6007 = 3, 0x605A = 2): QUICK STOP ACTIVE until at rest, then SWITCH ON DISABLED
-    while rig.state_of(0) != "SWITCH ON DISABLED":
-        assert time.monotonic() - t_stop < 3.0, "axis did not stop"
-        time.sleep(0.02)
+    assert rig.wait_heartbeat(0x7F, 5.0, m) is not None, "node did not go to PRE-OPERATIONAL"
+    # quick stop (0x6007 = 3, 0x605A = 2): QUICK STOP ACTIVE until at rest, then SWITCH ON DISABLED (the wait is a
+    # bound for a loaded machine: the stop takes well under a second of the node's clock)
+    rig.wait_until(lambda: rig.state_of(0) == "SWITCH ON DISABLED", 30.0, "axis did not stop", poll=0.02)
     stopped = rig.demand(0)
     assert 0 < stopped < 200000
     time.sleep(0.1)
@@ -49,7 +50,7 @@ def test_heartbeat_loss(rig):
     # the master comes back: the heartbeat error is cleared (EMCY with code 0: no error left)
     m2 = rig.frames.mark()
     rig.start_heartbeat(MASTER_ID, 0.05)
-    assert rig.frames.wait_emcy(nid, 0x0000, 1.0, m2) is not None, "no error-reset EMCY"
+    assert rig.frames.wait_emcy(nid, 0x0000, 10.0, m2) is not None, "no error-reset EMCY"
     if rig.local:
         tr = rig.trace()
         st = tr.axis(0, "state")

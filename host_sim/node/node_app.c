@@ -71,6 +71,7 @@ lsm_status node_app_init(node_app *app, const node_app_config *cfg, uint32_t now
     cc.tx_cap = NODE_APP_TXQ;
     cc.path_storage = app->blocks;
     cc.path_cap = cfg->path_slots;
+    cc.sdo_background = true; /* the firmware's split; this synchronous loop runs the server (lsm_canopen_sdo_sync) */
     lsm_status st = lsm_canopen_init(&app->co, &cc, now_us);
     if (st != LSM_OK)
         return st;
@@ -97,6 +98,8 @@ lsm_status node_app_rx(node_app *app, const lsm_can_frame *f, uint32_t now_us)
     lsm_status st = lsm_canopen_rx(&app->co, f, now_us);
     if (st != LSM_OK)
         app->rx_errors++;
+    else if (f->id == app->co.sdo_cob_rx)
+        lsm_canopen_sdo_sync(&app->co, now_us); /* answered in arrival order, as by a node served in one context */
     return st;
 }
 
@@ -115,6 +118,7 @@ void node_app_cycle(node_app *app, bool estop_active, uint32_t now_us)
     const unsigned n = app->cfg.n_axes;
     app->estop = estop_active;
     lsm_canopen_estop(&app->co, estop_active, now_us);
+    lsm_canopen_sdo_sync(&app->co, now_us); /* the background's SDO step (its timeout), then the tick's */
     (void)lsm_canopen_process(&app->co, now_us);
     lsm_motion_cycle(&app->mo, &app->co);
     for (unsigned k = 0; k < n; k++) {

@@ -8,7 +8,9 @@
  * One control cycle (node_app_cycle), in this order:
  *   1. E-stop level -> lsm_canopen_estop; pending port bus events -> lsm_canopen_bus_event (done by the caller
  *      through node_app_bus_event before the cycle); received frames were served by node_app_rx;
- *   2. lsm_canopen_process (timers, heartbeats, EMCY, path/axis coupling);
+ *   2. lsm_canopen_sdo_sync (the background SDO server's step and the tick's side of its hand-off: canopen.h; also
+ *      after each SDO request in node_app_rx, so responses keep their place), lsm_canopen_process (timers,
+ *      heartbeats, EMCY, path/axis coupling);
  *   3. lsm_motion_cycle: the demand of every axis (motion.h);
  *   4. each drive gets its demand (and the demand velocity as feed-forward); its feedback goes back through
  *      lsm_motion_feedback (0x6062, 0x6064, 0x606C, standstill, PP set-point done);

@@ -15,6 +15,35 @@
 
 #include "canopen.h"
 
+#ifdef CO_TEST_SDO_SPLIT
+/* The split build of a test file (tests/CMakeLists.txt, *_sdobg): the node runs its SDO server as in the firmware's
+ * two contexts (cfg.sdo_background), driven by the synchronous loop of lissom-node: lsm_canopen_sdo_sync after each
+ * SDO request and before each lsm_canopen_process. Every expectation of the one-context test must still hold. */
+static inline lsm_status tn_split_rx(lsm_canopen *n, const lsm_can_frame *f, uint32_t now_us)
+{
+    const lsm_status st = lsm_canopen_rx(n, f, now_us);
+    if (st == LSM_OK && n != NULL && f != NULL && f->id == n->sdo_cob_rx)
+        lsm_canopen_sdo_sync(n, now_us);
+    return st;
+}
+
+static inline lsm_status tn_split_process(lsm_canopen *n, uint32_t now_us)
+{
+    lsm_canopen_sdo_sync(n, now_us);
+    return lsm_canopen_process(n, now_us);
+}
+
+static inline lsm_status tn_split_init(lsm_canopen *n, lsm_canopen_config *cfg, uint32_t now_us)
+{
+    if (cfg != NULL)
+        cfg->sdo_background = true;
+    return lsm_canopen_init(n, cfg, now_us);
+}
+#define lsm_canopen_rx(n, f, t) tn_split_rx((n), (f), (t))
+#define lsm_canopen_process(n, t) tn_split_process((n), (t))
+#define lsm_canopen_init(n, c, t) tn_split_init((n), (c), (t))
+#endif
+
 #define NODE_ID 5u
 #define TXCAP 64u
 #define PATHCAP 8u

@@ -23,6 +23,7 @@ lsm_status ctl_app_init(ctl_app *a, const ctl_app_config *cfg)
     cc.tx_cap = CTL_TXQ;
     cc.path_storage = a->blocks;
     cc.path_cap = CTL_PATH_SLOTS;
+    cc.sdo_background = true; /* the SDO server runs in ctl_app_background */
     lsm_status st = lsm_canopen_init(&a->co, &cc, 0u);
     if (st != LSM_OK)
         return st;
@@ -86,6 +87,7 @@ void ctl_app_tick(ctl_app *a, uint32_t now_us, bool estop_active, const lsm_cano
     if (stats != NULL)
         lsm_canopen_set_tick_stats(&a->co, stats);
     serve_link_rx(a);
+    lsm_atomic_put_release(&a->clock_us, now_us); /* after the requests it received: lsm_canopen_sdo_background */
     lsm_canopen_estop(&a->co, estop_active, a->now_us);
     (void)lsm_canopen_process(&a->co, a->now_us);
     ctl_motion_tick(a->motion, &a->co, a->now_us);
@@ -95,5 +97,7 @@ void ctl_app_tick(ctl_app *a, uint32_t now_us, bool estop_active, const lsm_cano
 
 bool ctl_app_background(ctl_app *a)
 {
-    return ctl_motion_background(a->motion);
+    const bool sdo = lsm_canopen_sdo_background(&a->co, lsm_atomic_get_acquire(&a->clock_us));
+    const bool motion = ctl_motion_background(a->motion);
+    return sdo || motion;
 }

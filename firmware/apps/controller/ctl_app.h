@@ -9,19 +9,24 @@
  *   ctl_app_tick         the control tick, once per cycle. In this order:
  *                          1. the slcan lines received since the last tick, at most CTL_RX_CHARS_PER_TICK
  *                             characters (the rest waits for the next tick): commands answered, frames served
- *                             by lsm_canopen_rx (NMT, SYNC, RPDO, heartbeat and SDO alike, in arrival order);
- *                          2. lsm_canopen_estop, lsm_canopen_process (timers, heartbeats, TPDOs at SYNC, EMCY);
+ *                             by lsm_canopen_rx in arrival order (NMT, SYNC, RPDO, heartbeat; SDO requests are
+ *                             queued for the background's SDO server);
+ *                          2. lsm_canopen_estop, lsm_canopen_process (timers, heartbeats, TPDOs at SYNC, EMCY; the
+ *                             SDO server's object access of this cycle and its responses into the TX queue);
  *                          3. ctl_motion_tick (demands, feedback);
  *                          4. the node's frames up the link as slcan lines while the link has room (a frame that
  *                             finds no room waits for the next tick; while the channel is closed, the frames are
  *                             dropped, as an adapter drops bus traffic nobody opened it for).
- *                        The tick owns the node: nothing else calls it (canopen.h is single-context).
- *   ctl_app_background   the main loop: ctl_motion_background (the path feed: planner appends,
- *                        lsm_interp_prepare, the interpolator run ahead of the tick; motion.h, mpipe.h).
- * Why the SDO server runs in the tick: lsm_canopen serves one frame stream in order (an NMT stop followed by an
- * SDO request must find the node stopped), and one context per node is its contract. An SDO request costs a
- * few thousand instructions at most (segmented path blocks included), measured in the tick's worst case
- * (0x5F00 sub 3).
+ *                        The tick owns the node and its object dictionary: canopen.h, "Contexts".
+ *   ctl_app_background   the main loop: the SDO server (lsm_canopen_sdo_background: the protocol of expedited and
+ *                        segmented transfers, aborts and timeouts; its object accesses are applied by the tick, so
+ *                        every object write and its side effects stay in the tick) and ctl_motion_background (the
+ *                        path feed: planner appends, lsm_interp_prepare, the interpolator run ahead of the tick;
+ *                        motion.h, mpipe.h).
+ * Hand-offs: canopen.h (SDO: request ring, one access mailbox, response ring, reset epoch), mpipe.h (motion), and
+ * clock_us (the tick's now_us for the SDO server's timeouts: one word, release / acquire). An SDO transfer step is
+ * answered 1-2 ticks after its request arrives (its response leaves in the tick after the background made it).
+ * The tick never waits on the background.
  * Time: now_us comes from the board's clock (a hardware timer, as lsm_port_time_us), not from counting ticks: a
  * tick that comes late (or is lost) delays the motion by a cycle but not the node's timers (heartbeats, SDO and
  * heartbeat-consumer timeouts).
@@ -81,7 +86,8 @@ typedef struct ctl_app {
     ctl_link link;
     uint32_t cycle_us;
     uint32_t now_us;
-    lsm_can_frame pending; /* a frame taken from the node that waits for room on the link */
+    lsm_atomic_u32 clock_us; /* the tick's now_us, for the background's SDO timeouts (tick-written, release) */
+    lsm_can_frame pending;   /* a frame taken from the node that waits for room on the link */
     bool have_pending;
     ctl_app_counters n;
 } ctl_app;
@@ -95,7 +101,8 @@ lsm_status ctl_app_init(ctl_app *a, const ctl_app_config *cfg);
  * stats: the port's tick statistics for 0x5F00 (may be NULL). Control tick. */
 void ctl_app_tick(ctl_app *a, uint32_t now_us, bool estop_active, const lsm_canopen_tick_stats *stats);
 
-/* The background's share of the work; true when something was done. Main loop. */
+/* The background's share of the work: the SDO server, then the motion layer's background; true when something was
+ * done. Main loop. */
 bool ctl_app_background(ctl_app *a);
 
 #endif /* CTL_APP_H */

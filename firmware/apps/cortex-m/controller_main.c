@@ -7,9 +7,10 @@
  *   tick        SysTick, highest priority, every CTL_TICK_INSTR instructions (below): ctl_app_tick (the host's slcan
  *               lines -> the node, lsm_canopen_process, ctl_motion_tick, the node's frames -> UART), the 0x5F00
  *               statistics, the outputs (FPGA LEDs: drive enable, in position);
- *   background  the main loop: ctl_app_background (the motion layer's path feed: block appends,
- *               lsm_interp_prepare, the interpolator run ahead of the tick, motion.h); when it has nothing to do
- *               it sleeps in WFI until the next interrupt. It never touches the node; the tick never waits on it.
+ *   background  the main loop: ctl_app_background (the SDO server, whose object accesses the tick applies:
+ *               canopen.h; the motion layer's path feed: block appends, lsm_interp_prepare, the interpolator run
+ *               ahead of the tick, motion.h); when it has nothing to do it sleeps in WFI until the next interrupt.
+ *               It reaches the node only through the hand-offs (canopen.h, mpipe.h); the tick never waits on it.
  *   UART 0's RX and TX interrupts (below the tick) only move characters between the UART and two rings.
  *
  * Time. The image models a 168 MHz Cortex-M4 executing one instruction per cycle: a 1 ms control cycle is

@@ -4,6 +4,8 @@
 #   scripts/bench_ruckig.sh RUCKIG_SRC [CASES [SECONDS_PER_ROW [SEED]]]
 # RUCKIG_SRC: a checkout of github.com/pantor/ruckig (built here with CMake into RUCKIG_SRC/build-lissom).
 # Uses the host build's double core (build/, scripts/build.sh first); LSM_BENCH_FLOAT=1 for the float core.
+# LSM_BENCH_REF=REV times firmware/profile/scurve.c and move.c of git revision REV instead (the "before" of a
+# change, measured in the same period as the "after").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 src=${1:?usage: scripts/bench_ruckig.sh RUCKIG_SRC [CASES [SECONDS [SEED]]]}
@@ -19,7 +21,18 @@ suffix=""; [ "${LSM_BENCH_FLOAT:-0}" = 1 ] && suffix="_f"
 cmake --build build -j2 --target "lsm_profile$suffix" "lsm_base$suffix" >/dev/null
 defs=""; [ -n "$suffix" ] && defs="-DLSM_REAL_FLOAT=1"
 out=build/bench_ruckig_vs_move$suffix
+ref_objs=()
+if [ -n "${LSM_BENCH_REF:-}" ]; then
+  refdir=$(mktemp -d)
+  trap 'rm -rf "$refdir"' EXIT
+  for f in scurve.c scurve.h move.c move.h; do git show "$LSM_BENCH_REF:firmware/profile/$f" > "$refdir/$f"; done
+  for f in scurve move; do
+    cc -O2 -g -DNDEBUG -std=c11 $defs -I"$refdir" -Ifirmware/base -c "$refdir/$f.c" -o "$refdir/$f.o"
+    ref_objs+=("$refdir/$f.o")
+  done
+  out=$refdir/bench
+fi
 g++ -O2 -std=c++17 $defs -Ifirmware/base -Ifirmware/profile -Ibuild/firmware/base -I"$src/include" \
-  bench/ruckig_vs_move.cpp build/firmware/profile/liblsm_profile$suffix.a build/firmware/base/liblsm_base$suffix.a \
-  "$rb/libruckig.a" -lm -o "$out"
+  bench/ruckig_vs_move.cpp "${ref_objs[@]}" build/firmware/profile/liblsm_profile$suffix.a \
+  build/firmware/base/liblsm_base$suffix.a "$rb/libruckig.a" -lm -o "$out"
 "$out" "$@"

@@ -138,6 +138,260 @@ static lsm_status single_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D
     return LSM_OK;
 }
 
+/* One tried peak feed of the strict search: its quantised ramps and their distance. */
+typedef struct peak_try {
+    lsm_real v;      /* peak feed vp */
+    lsm_real d;      /* distance of the two ramps v0 -> vp -> v1 (mm); -1 on overflow */
+    uint32_t ta, td; /* their total cycles */
+    shape sh;        /* their intervals (nc unused) */
+} peak_try;
+
+/* The largest number of peaks the strict search tries (it usually stops after 2-5). */
+#define PEAK_TRIES 64
+
+/* Sizes both ramps of peak vp (as ramps_shape does, strict rule, with the axis's sizer). */
+static bool try_peak(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, lsm_real vp, peak_try *p)
+{
+    p->v = vp;
+    p->d = -1;
+    if (!lsm_scurve_sizer_intervals(sz, lsm_fabs(vp - v0), &p->sh.acc))
+        return false;
+    if (v1 == v0)
+        p->sh.dec = p->sh.acc;
+    else if (!lsm_scurve_sizer_intervals(sz, lsm_fabs(vp - v1), &p->sh.dec))
+        return false;
+    p->ta = lsm_scurve_total_cycles(&p->sh.acc);
+    p->td = lsm_scurve_total_cycles(&p->sh.dec);
+    p->d = ((v0 + vp) * (lsm_real)p->ta + (vp + v1) * (lsm_real)p->td) * sz->cycle_s / 2;
+    return true;
+}
+
+/*
+ * The root of a tried peak's distance line: with its ramp totals Ta, Td (cycles) fixed, the ramps travel
+ * ((v0 + vp) Ta + (vp + v1) Td) dt / 2, linear in vp; it equals D at (2 D / dt - v0 Ta - v1 Td) / (Ta + Td).
+ * Totals never decrease with the peak, so the quantised distance is at least this line above the tried peak and
+ * at most it below: a feasible try's root bounds the answer from above, an infeasible try's root from below.
+ */
+static lsm_real peak_root(const peak_try *p, lsm_real d2_dt, lsm_real v0, lsm_real v1)
+{
+    const uint32_t n = p->ta + p->td;
+    if (n == 0)
+        return LSM_REAL_MAX;
+    return (d2_dt - v0 * (lsm_real)p->ta - v1 * (lsm_real)p->td) / (lsm_real)n;
+}
+
+static bool same_totals(const peak_try *a, const peak_try *b)
+{
+    return a->ta == b->ta && a->td == b->td;
+}
+
+/* No ramp total lies strictly between the two tries' (so no third distance line lies between them). */
+static bool adjacent_totals(const peak_try *lo, const peak_try *hi, bool one_ramp)
+{
+    const uint32_t da = hi->ta - lo->ta, dd = hi->td - lo->td;
+    return one_ramp ? da == 1 : da + dd == 1;
+}
+
+/* Relative step past a ramp's velocity capacity (2 ulp of the feed: float slivers where another interval set of
+ * the same totals holds are a few ulp wide; last_intervals steps further while the sizing keeps the intervals). */
+#define PAST_CAPACITY (2 * LSM_REAL_EPS)
+
+/* The peak just past the velocity capacity of lo's intervals (by a relative `past`): where the first of lo's two
+ * ramps must change its intervals (no larger velocity change fits them; the sizing then takes others). */
+static lsm_real past_capacity(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, const peak_try *lo, lsm_real past)
+{
+    const lsm_real cap = lsm_min2(v0 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.acc),
+                                  v1 + lsm_scurve_dv_capacity(&sz->lim, sz->cycle_s, &lo->sh.dec));
+    return lsm_max2(cap, lo->v) * (1 + past);
+}
+
+/*
+ * lo and hi are on adjacent lines and every feasible peak between them has lo's totals. Several intervals can
+ * share those totals (n1, n2 and n4 traded against each other); the sizing takes the one with the larger eq-34
+ * denominator while it holds the velocity change, so the intervals change within lo's line as the peak grows.
+ * The answer is the one just below the jump: step past the velocity capacity of lo's intervals until the totals
+ * change (usually once).
+ */
+static void last_intervals(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, peak_try *lo, const peak_try *hi,
+                           lsm_real D)
+{
+    lsm_real past = PAST_CAPACITY;
+    for (int k = 0; k < 6; k++) {
+        const lsm_real x = past_capacity(sz, v0, v1, lo, past);
+        peak_try m;
+        if (!(x > lo->v && x < hi->v) || !try_peak(sz, v0, v1, x, &m))
+            return;
+        if (!same_totals(&m, lo) || m.d > D)
+            return;
+        if (iv_equal(&m.sh.acc, &lo->sh.acc) && iv_equal(&m.sh.dec, &lo->sh.dec))
+            past *= 8; /* the capacity's rounding kept the intervals: step further */
+        *lo = m;
+    }
+}
+
+typedef enum peak_kind { PEAK_ROOT_LO, PEAK_ROOT_HI, PEAK_VMAX, PEAK_INNER } peak_kind;
+
+/* False position's share of the bracket kept clear at either end (the inner step never lands on an end). */
+#define PEAK_INNER_MIN LSM_R(0.05)
+/* Ramp totals (summed over both ramps) within which lo and hi are near: a few transitions apart. */
+#define PEAK_NEAR 4u
+
+/*
+ * The inner step, inside the bracket:
+ *   - lo and hi near (PEAK_NEAR): just past the velocity capacity of lo's intervals, the next transition up (one
+ *     ramp changes its intervals there; false position would fall on hi's side of a small middle line);
+ *   - hi overflowed, or the last two inner steps moved the same end (false position creeping): half way;
+ *   - otherwise false position on the distance, within [max(lo, root(hi)), min(hi, root(lo))], clear of its ends.
+ */
+static lsm_real inner_peak(const lsm_scurve_sizer *sz, lsm_real v0, lsm_real v1, const peak_try *lo, const peak_try *hi,
+                           bool hi_sized, bool creeping, lsm_real rl, lsm_real rh, lsm_real D)
+{
+    if (hi_sized && (hi->ta - lo->ta) + (hi->td - lo->td) <= PEAK_NEAR) {
+        const lsm_real x = past_capacity(sz, v0, v1, lo, PAST_CAPACITY);
+        if (x > lo->v && x < hi->v)
+            return x;
+    }
+    if (!hi_sized || creeping || !(hi->d > lo->d))
+        return lo->v + (hi->v - lo->v) / 2;
+    const lsm_real a = lsm_max2(lo->v, rh), b = lsm_min2(hi->v, rl);
+    const lsm_real x = lo->v + (hi->v - lo->v) * ((D - lo->d) / (hi->d - lo->d));
+    const lsm_real w = (b - a) * PEAK_INNER_MIN;
+    return b > a ? lsm_min2(lsm_max2(x, a + w), b - w) : lo->v + (hi->v - lo->v) / 2;
+}
+
+/*
+ * A first guess at the peak of a move from rest to rest, from the continuous (unquantised) ramp of scurve.h: the
+ * ramps v -> 0 and 0 -> v travel d(v) = v Tc(v), with Tc = 4 t1 + 2 t2 + t4 the ramp's duration, and d(v) = D is
+ * solved in the regime that binds (derived here from eqs 25-37):
+ *   eq 29 binds (v < v_a = 4 DJ t1³ / pi):  Tc = 4 cbrt(pi v / (4 DJ)),  so v = (D³ DJ / (16 pi))^(1/4);
+ *   t1 fixed, T2 grows (t2 <= t2a):         with u = 2 t1 + t2, v = jc (u - t1) u and D = 2 jc (u - t1) u²
+ *                                            (Newton from cbrt(D / 2jc) + t1, an upper bound of u);
+ *   A binds, T4 grows:                       Tc = 2 t1 + t2a + v / A,  so v² / A + (2 t1 + t2a) v = D.
+ * Only a starting point for the search (which checks everything on the quantised ramps); non-finite if the
+ * limits overflow it.
+ */
+static lsm_real rest_peak_guess(const lsm_scurve_sizer *sz, lsm_real D)
+{
+    const lsm_real A = sz->lim.a_max_mm_s2, DJ = sz->lim.snap_max_mm_s4, t1 = sz->t1_s, jc = sz->jc_mm_s3;
+    const lsm_real pi = (lsm_real)LSM_PI;
+    const lsm_real v_a = 4 * DJ * t1 * t1 * t1 / pi;
+    if (D <= 4 * t1 * v_a)
+        return lsm_sqrt(lsm_sqrt(D * D * D * DJ / (16 * pi)));
+    const lsm_real b = 2 * t1 + lsm_max2(sz->t2a_s, 0);
+    if (D <= 2 * jc * (b - t1) * b * b) {
+        const lsm_real c = D / (2 * jc);
+        lsm_real u = lsm_min2(lsm_cbrt(c) + t1, b);
+        for (int k = 0; k < 2; k++)
+            u -= (u * u * (u - t1) - c) / (u * (3 * u - 2 * t1));
+        return jc * (u - t1) * u;
+    }
+    return 2 * D / (b + lsm_sqrt(b * b + 4 * D / A));
+}
+
+/*
+ * Strict rule: the ramp intervals of the largest peak vp in [max(v0, v1), v_max] whose quantised ramps travel at
+ * most D (the minimal-time shape before the exact fit, as single_shape finds it). The distance is a step-wise
+ * linear, non-decreasing function of vp (one line per pair of ramp totals). The search alternates a false-position
+ * step with a step to the root of the line of the peak it just tried (peak_root), and ends when
+ *   - a root tried has the totals of the peak whose root it is: the distance crosses D there, on that line;
+ *   - the bracket's two ends have the same totals: the answer is at the root of their common line;
+ *   - lo and hi have adjacent totals, lo's root lies beyond hi and hi's before lo: the distance jumps over D
+ *     between them, the answer is lo's line.
+ * v_max is tried only when lo's root reaches it.
+ */
+static lsm_status strict_peak_shape(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1,
+                                    shape *sh)
+{
+    const lsm_real vmax = L->v_max_mm_s, d2_dt = 2 * D / dt;
+    const bool one_ramp = v0 == v1;
+    const lsm_scurve_limits sl = ramp_limits(L);
+    lsm_scurve_sizer sz;
+    lsm_scurve_sizer_init(&sz, &sl, dt);
+    peak_try lo, hi, m;
+    if (!try_peak(&sz, v0, v1, lsm_max2(v0, v1), &lo))
+        return LSM_E_TOO_LONG;
+    if (lo.d > D)
+        return LSM_E_INFEASIBLE;
+    hi = lo;
+    hi.v = vmax;
+    bool hi_tried = false, hi_sized = false; /* hi: an infeasible try (sized: not an overflow) */
+    bool root_next = false;                  /* the last try was an inner one: try its root next */
+    bool last_lo = true;                     /* ... and it became lo (else hi); lo is the first try */
+    int inner_side[2] = {0, 0};              /* the ends the last two inner steps moved: -1 lo, +1 hi */
+    const peak_try *ans = &lo;
+    for (int i = 0; i < PEAK_TRIES; i++) {
+        const lsm_real rl = peak_root(&lo, d2_dt, v0, v1);
+        const lsm_real rh = hi_sized ? peak_root(&hi, d2_dt, v0, v1) : lo.v;
+        if (hi_sized && same_totals(&lo, &hi)) {
+            /* one line spans the bracket: the answer is at its root */
+            if (!(iv_equal(&lo.sh.acc, &hi.sh.acc) && iv_equal(&lo.sh.dec, &hi.sh.dec)) &&
+                try_peak(&sz, v0, v1, lsm_min2(lsm_max2(rl, lo.v), hi.v), &m))
+                ans = &m;
+            break;
+        }
+        if (!(rl > lo.v))
+            break; /* lo is at its own line's root */
+        if (hi_tried && !(rh > lo.v) && !(rl < hi.v) && hi_sized && adjacent_totals(&lo, &hi, one_ramp)) {
+            /* the distance jumps over D between lo's line and hi's: the answer is the intervals that lo's totals
+             * have just below the jump */
+            last_intervals(&sz, v0, v1, &lo, &hi, D);
+            break;
+        }
+        lsm_real x;
+        peak_kind kind;
+        if (i == 0 && v0 == 0 && v1 == 0) {
+            /* from rest to rest: start at the continuous model's peak (or v_max if that is beyond it) */
+            x = rest_peak_guess(&sz, D);
+            kind = PEAK_INNER;
+            if (!(x < vmax)) {
+                x = vmax;
+                kind = PEAK_VMAX;
+            } else if (!(x > lo.v)) {
+                x = lo.v + (vmax - lo.v) / 2;
+            }
+        } else if (!hi_tried && !(rl < vmax)) {
+            x = vmax;
+            kind = PEAK_VMAX;
+        } else if ((root_next || !hi_tried) && last_lo && rl < hi.v) {
+            x = rl;
+            kind = PEAK_ROOT_LO;
+        } else if (root_next && !last_lo && rh > lo.v && rh < hi.v) {
+            x = rh;
+            kind = PEAK_ROOT_HI;
+        } else {
+            x = inner_peak(&sz, v0, v1, &lo, &hi, hi_sized, inner_side[0] != 0 && inner_side[0] == inner_side[1], rl,
+                           rh, D);
+            kind = PEAK_INNER;
+            if (!(x > lo.v && x < hi.v))
+                break; /* the bracket is down to adjacent feeds */
+        }
+        const bool sized = try_peak(&sz, v0, v1, x, &m);
+        if (sized &&
+            ((kind == PEAK_ROOT_LO && same_totals(&m, &lo)) || (kind == PEAK_ROOT_HI && same_totals(&m, &hi)))) {
+            ans = &m; /* the distance crosses D at this root, on this line */
+            break;
+        }
+        root_next = kind == PEAK_INNER || kind == PEAK_VMAX;
+        last_lo = sized && m.d <= D;
+        if (kind == PEAK_INNER) {
+            inner_side[1] = inner_side[0];
+            inner_side[0] = last_lo ? -1 : 1;
+        }
+        if (last_lo) {
+            lo = m;
+            if (kind == PEAK_VMAX)
+                break; /* v_max itself fits */
+        } else {
+            hi = m;
+            hi_tried = true;
+            hi_sized = sized;
+        }
+    }
+    sh->acc = ans->sh.acc;
+    sh->dec = ans->sh.dec;
+    return LSM_OK;
+}
+
 /*
  * With the ramp intervals of sh fixed, the fastest cruise length for which this axis's cruise feed keeps both
  * ramps within the limits and under v_max. The feed is vc(nc) = num / (ta/2 + nc dt + td/2) (eq (1) of move.h)
@@ -220,8 +474,14 @@ static lsm_real alt_peak(int k, lsm_real vp, lsm_real v0, lsm_real v1, lsm_real 
  */
 static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
 {
+    lsm_status st = strict_peak_shape(L, dt, D, v0, v1, best);
+    if (st != LSM_OK)
+        return st;
+    if (window_nc(L, dt, D, v0, v1, best))
+        return LSM_OK;
+    /* the fallback starts from single_shape's peak (and its shape, which may also fit) */
     lsm_real vp;
-    lsm_status st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
+    st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
     if (st != LSM_OK)
         return st;
     if (window_nc(L, dt, D, v0, v1, best))
@@ -265,8 +525,9 @@ static bool axis_still(const lsm_move_request *req, unsigned i)
  * Solves every axis's cruise feed for the shared shape (eq (1) of move.h) and widens the shape until every
  * axis fits its limits. When a ramp must widen, the cruise is shortened so that the reference axis (the
  * slowest) keeps its current cruise feed: the move does not get slower than it must. Fills mv on success.
+ * With `alone`, only the reference axis counts (the others are taken as still), as for one axis planned alone.
  */
-static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_move *mv)
+static lsm_status fit(const lsm_move_request *req, unsigned ref, bool alone, shape *sh, lsm_move *mv)
 {
     const lsm_real dt = req->cycle_s;
     for (int iter = 0; iter < FIT_MAX_ITER; iter++) {
@@ -285,7 +546,7 @@ static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_
             (lsm_fabs(req->distance_mm[ref]) - req->v0_mm_s[ref] * ta / 2 - req->v1_mm_s[ref] * td / 2) / denom;
         bool ok = true, widened = false;
         for (unsigned i = 0; i < req->n_axes && ok; i++) {
-            if (axis_still(req, i))
+            if (axis_still(req, i) || (alone && i != ref))
                 continue;
             const lsm_axis_limits *L = &req->lim[i];
             const lsm_real v0 = req->v0_mm_s[i], v1 = req->v1_mm_s[i];
@@ -343,7 +604,7 @@ static lsm_status fit(const lsm_move_request *req, unsigned ref, shape *sh, lsm_
             ax->dir = req->distance_mm[i] < 0 ? -1 : 1;
             ax->v0_mm_s = v0;
             ax->v1_mm_s = v1;
-            if (axis_still(req, i)) {
+            if (axis_still(req, i) || (alone && i != ref)) {
                 ax->vc_mm_s = ax->jp_acc_mm_s3 = ax->jp_dec_mm_s3 = 0;
                 continue;
             }
@@ -409,6 +670,7 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
 
     /* 1. each axis alone: its minimal-time shape, made exact */
     uint32_t slowest_cycles = 0;
+    unsigned moving = 0;
     shape shared = {{0, 0, 0}, {0, 0, 0}, 0};
     mv->slowest_axis = 0;
     for (unsigned i = 0; i < req->n_axes; i++) {
@@ -424,13 +686,10 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
         }
         if (st != LSM_OK)
             return st;
-        lsm_move_request one = *req;
-        for (unsigned k = 0; k < req->n_axes; k++)
-            if (k != i)
-                one.distance_mm[k] = one.v0_mm_s[k] = one.v1_mm_s[k] = 0;
-        st = fit(&one, i, &sh, mv);
+        st = fit(req, i, true, &sh, mv);
         if (st != LSM_OK)
             return st;
+        moving++;
         const uint32_t n = lsm_move_total_cycles(mv);
         if (n > slowest_cycles) {
             slowest_cycles = n;
@@ -438,8 +697,11 @@ lsm_status lsm_move_plan(lsm_move *mv, const lsm_move_request *req)
             mv->slowest_axis = (uint8_t)i;
         }
     }
-    /* 2. all axes on the slowest axis's intervals, each with its own vc and corrected J_P */
-    return fit(req, mv->slowest_axis, &shared, mv);
+    /* 2. all axes on the slowest axis's intervals, each with its own vc and corrected J_P; with one moving axis,
+     * its fit alone already is that (the still axes are filled the same) */
+    if (moving == 1)
+        return LSM_OK;
+    return fit(req, mv->slowest_axis, false, &shared, mv);
 }
 
 uint32_t lsm_move_total_cycles(const lsm_move *mv)

@@ -13,8 +13,10 @@
  * using S = (F0 + F) tp / 2 for each velocity change (point symmetry of the sin² ramp). With the whole-cycle
  * intervals fixed, (1) is linear in vc, so vc is solved exactly, and each ramp's peak jerk is then corrected
  * by Kombarov eq 34 for its actual velocity change. The move therefore ends exactly at D with feed v1 and
- * A = J = 0. When D is short the profile shortens: the peak feed vp < v_max is found by bisection on the
- * distance of the quantised ramps, and the cruise may vanish.
+ * A = J = 0. When D is short the profile shortens: the peak feed vp < v_max is the largest whose quantised
+ * ramps travel at most D, and the cruise may vanish. That distance is step-wise linear in vp (one line per pair
+ * of ramp totals), so the search (move.c, strict rule) tries the roots of those lines, starting from rest at the
+ * continuous model's peak: about 2.4 ramp sizings per axis.
  *
  * Synchronisation: every axis has its own limits, distance and feeds. Each axis is first planned alone; all
  * axes then share the intervals (ta, tc, td split into n1, n2, n4) of the slowest one, and every axis gets its

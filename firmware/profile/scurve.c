@@ -104,57 +104,151 @@ static uint32_t to_count(lsm_real x)
     return (uint32_t)x;
 }
 
-bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                 lsm_scurve_intervals *iv)
+/*
+ * Lower bounds of a candidate's total cycles, from the limits alone (derived here). With r = 2 n1 + n2 + n4 and
+ * s = n1 + n2, eq 34's denominator is dt² s r, and the corrected J_P = dv / den keeps the jerk cap (eqs 10, 16,
+ * 22) only if r >= max(KJ / s, KA, KS / (n1 s)), with KJ = dv / (J dt²), KA = dv / (A dt), KS = pi dv / (2 DJ dt³);
+ * also r >= 2 n1 + n2 (n4 >= 0). The total 4 n1 + 2 n2 + n4 is 2 n1 + n2 + r. The constants are shrunk by
+ * LB_MARGIN so that the bound holds for the rounded n4 that min_n4 computes (a few ulp, relative), in float too.
+ */
+#define LB_MARGIN LSM_R(1e-4)
+
+typedef struct total_bound {
+    lsm_real kj, ka, ks; /* KJ, KA, KS of the comment above, times (1 - LB_MARGIN) */
+} total_bound;
+
+/* True if candidate (n1, n2) certainly takes more cycles than best_total (so it can neither win nor tie). */
+static bool cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
+{
+    const uint32_t q = 2 * n1 + n2; /* < 2^30: n1, n2 <= LSM_MAX_INTERVAL_CYCLES + 2 (32-bit: no libgcc helper) */
+    if (q > best_total / 2)
+        return true; /* the total is at least 2 q (n4 >= 0) */
+    /* room: the largest r that still ties (an integer: r > room means a longer total); the relative margin
+     * absorbs the rounding of the products below */
+    const lsm_real room = (lsm_real)(best_total - q) * (1 + LB_MARGIN);
+    const lsm_real s = (lsm_real)(n1 + n2);
+    return b->ka > room || b->kj > room * s || b->ks > room * s * (lsm_real)n1;
+}
+
+/* Sizing candidates are ranked by total cycles, then by the larger eq-34 denominator (the lower jerk), then by
+ * their place in the window's scan order (n1 ascending, n2 ascending, n2 = 0 last): the scan's first winner. */
+typedef struct cand_best {
+    uint32_t total;
+    uint32_t order;
+    lsm_real den;
+    bool found;
+} cand_best;
+
+/* Sizes candidate (n1, n2) (scan position `order`) and keeps it in *best / *iv if it ranks higher. */
+static void try_candidate(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2,
+                          uint32_t order, cand_best *best, lsm_scurve_intervals *iv)
+{
+    uint32_t n4;
+    if (!min_n4(lim, dt, dv, n1, n2, &n4))
+        return;
+    const uint64_t total = 4ull * n1 + 2ull * n2 + n4;
+    if (total >= LSM_MAX_INTERVAL_CYCLES)
+        return;
+    const lsm_scurve_intervals cand = {n1, n2, n4};
+    const lsm_real den = lsm_scurve_jerk_den(&cand, dt);
+    if (best->found && (total > best->total ||
+                        (total == best->total && (den < best->den || (den == best->den && order > best->order)))))
+        return;
+    best->total = (uint32_t)total;
+    best->order = order;
+    best->den = den;
+    best->found = true;
+    *iv = cand;
+}
+
+/* If x >= this factor times m³, cbrt(x) >= m by far more than its rounding (the guide's min skips the cbrt);
+ * CBRT_SKIP_MIN keeps m³ a normal number, where that relative margin means something. */
+#define CBRT_SKIP LSM_R(1.001)
+#define CBRT_SKIP_MIN LSM_R(1e-30)
+
+void lsm_scurve_sizer_init(lsm_scurve_sizer *sz, const lsm_scurve_limits *lim, lsm_real cycle_s)
+{
+    const lsm_real A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4, dt = cycle_s;
+    sz->lim = *lim;
+    sz->cycle_s = dt;
+    /* the guide's dv-free part (eqs 25, 26), exactly as lsm_scurve_strict_intervals computes it */
+    lsm_real t1 = PI_R * J / (2 * DJ);
+    t1 = lsm_min2(t1, lsm_sqrt(PI_R * A / (2 * DJ)));
+    sz->t1_s = t1;
+    const lsm_real m3 = t1 * t1 * t1;
+    sz->cbrt_skip_s3 = m3 >= CBRT_SKIP_MIN ? CBRT_SKIP * m3 : LSM_REAL_MAX;
+    sz->cbrt_x_per_dv = PI_R / (4 * DJ) * (1 - LB_MARGIN); /* x_f per unit dv, rounded down (skip test only) */
+    sz->jc_mm_s3 = 2 * t1 * DJ / PI_R;
+    sz->t2a_s = A / sz->jc_mm_s3 - t1;
+    sz->c1_cycles = to_count(lsm_floor(t1 / dt + (lsm_real)0.5));
+    const lsm_real keep = 1 - LB_MARGIN;
+    sz->kj_per_dv = keep / (J * dt * dt);
+    sz->ka_per_dv = keep / (A * dt);
+    sz->ks_per_dv = keep * PI_R / (2 * DJ * dt * dt * dt);
+}
+
+/* The window search: the best-ranked candidate (total, den, scan order) of the window around (c1, c2). */
+static bool window_best(const lsm_scurve_sizer *sz, lsm_real dv, uint32_t c1, uint32_t c2, lsm_scurve_intervals *iv)
+{
+    const uint32_t n1_lo = c1 > 3 ? c1 - 2 : 1, n1_hi = c1 + 2;
+    const uint32_t n2_lo = c2 > 2 ? c2 - 2 : 0, n2_hi = c2 + 2;
+    /* the window: n1 in [n1_lo, n1_hi]; n2 in [n2_lo, n2_hi], plus 0 (the profile without T2 and T6) */
+    const uint32_t n_k = n2_hi - n2_lo + (n2_lo > 0 ? 2 : 1);
+    /* the bounds' constants scale with dv (products: their rounding is inside LB_MARGIN's) */
+    const total_bound bnd = {sz->kj_per_dv * dv, sz->ka_per_dv * dv, sz->ks_per_dv * dv};
+    cand_best best = {0, 0, 0, false};
+    /* the guide's own candidate first: usually the winner, it lets the bounds skip most of the others */
+    const uint32_t g1 = c1 < n1_lo ? n1_lo : c1;
+    const uint32_t g_order = (g1 - n1_lo) * n_k + (c2 - n2_lo);
+    try_candidate(&sz->lim, sz->cycle_s, dv, g1, c2, g_order, &best, iv);
+    for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
+        for (uint32_t k = 0; k < n_k; k++) {
+            const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
+            const uint32_t order = (n1 - n1_lo) * n_k + k;
+            if (order == g_order || (best.found && cannot_tie(&bnd, n1, n2, best.total)))
+                continue;
+            try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
+        }
+    }
+    return best.found;
+}
+
+bool lsm_scurve_sizer_intervals(const lsm_scurve_sizer *sz, lsm_real dv_mm_s, lsm_scurve_intervals *iv)
 {
     iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
     if (!(dv_mm_s > 0))
         return true;
-    const lsm_real A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4;
-    /* continuous optimum as a guide (eqs 25, 26, 29, 35, 32, 27, 30) */
-    lsm_real t1c = PI_R * J / (2 * DJ);
-    t1c = lsm_min2(t1c, lsm_sqrt(PI_R * A / (2 * DJ)));
-    t1c = lsm_min2(t1c, lsm_cbrt(PI_R * dv_mm_s / (4 * DJ)));
-    const lsm_real jc = 2 * t1c * DJ / PI_R;
-    const lsm_real t2a = A / jc - t1c;
-    const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
-    const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
-
-    const uint32_t c1 = to_count(lsm_floor(t1c / cycle_s + (lsm_real)0.5));
-    const uint32_t c2 = to_count(lsm_floor(t2c / cycle_s + (lsm_real)0.5));
-    if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
-        return false;
-    const uint32_t n1_lo = c1 > 3 ? c1 - 2 : 1, n1_hi = c1 + 2;
-    const uint32_t n2_lo = c2 > 2 ? c2 - 2 : 0, n2_hi = c2 + 2;
-
-    uint32_t best_total = 0xFFFFFFFFu;
-    lsm_real best_den = 0;
-    bool found = false;
-    for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
-        /* n2 runs over the window around the guide, plus 0 (the profile without T2 and T6) */
-        for (uint32_t k = 0; k <= n2_hi - n2_lo + 1; k++) {
-            if (k > n2_hi - n2_lo && n2_lo == 0)
-                break;
-            const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
-            if (found && 4ull * n1 + 2ull * n2 > best_total)
-                continue; /* longer than the best even with n4 = 0 (ties still compete on the jerk) */
-            uint32_t n4;
-            if (!min_n4(lim, cycle_s, dv_mm_s, n1, n2, &n4))
-                continue;
-            const uint64_t total = 4ull * n1 + 2ull * n2 + n4;
-            if (total >= LSM_MAX_INTERVAL_CYCLES)
-                continue;
-            const lsm_scurve_intervals cand = {n1, n2, n4};
-            const lsm_real den = lsm_scurve_jerk_den(&cand, cycle_s);
-            if (total < best_total || (total == best_total && den > best_den)) {
-                best_total = (uint32_t)total;
-                best_den = den;
-                *iv = cand;
-                found = true;
-            }
+    const lsm_real A = sz->lim.a_max_mm_s2, DJ = sz->lim.snap_max_mm_s4, dt = sz->cycle_s;
+    /* continuous optimum as a guide (eqs 25, 26, 29, 35, 32, 27, 30); the dv-free part is the sizer's */
+    lsm_real t1c = sz->t1_s, jc = sz->jc_mm_s3, t2a = sz->t2a_s;
+    uint32_t c1 = sz->c1_cycles;
+    if (!(dv_mm_s * sz->cbrt_x_per_dv >= sz->cbrt_skip_s3)) {
+        const lsm_real t1f = lsm_cbrt(PI_R * dv_mm_s / (4 * DJ));
+        if (t1f < t1c) { /* eq 29 binds: the dv-free part changes */
+            t1c = t1f;
+            jc = 2 * t1c * DJ / PI_R;
+            t2a = A / jc - t1c;
+            c1 = to_count(lsm_floor(t1c / dt + (lsm_real)0.5));
         }
     }
-    return found;
+    const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
+    const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
+    const uint32_t c2 = to_count(lsm_floor(t2c / dt + (lsm_real)0.5));
+    if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
+        return false;
+    return window_best(sz, dv_mm_s, c1, c2, iv);
+}
+
+bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
+                                 lsm_scurve_intervals *iv)
+{
+    if (!(dv_mm_s > 0)) {
+        iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
+        return true;
+    }
+    lsm_scurve_sizer sz;
+    lsm_scurve_sizer_init(&sz, lim, cycle_s);
+    return lsm_scurve_sizer_intervals(&sz, dv_mm_s, iv);
 }
 
 static void paper_intervals(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, lsm_scurve_intervals *iv,

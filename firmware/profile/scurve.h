@@ -111,6 +111,27 @@ lsm_status lsm_scurve_plan(lsm_scurve *out, const lsm_scurve_limits *lim, lsm_re
 bool lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
                                  lsm_scurve_intervals *iv);
 
+/*
+ * The same sizing for many velocity changes with one set of limits and cycle (a move's axis, a planner's path):
+ * lsm_scurve_sizer_init computes the dv-free constants once (eqs 25, 26 and the guide's jerk), and
+ * lsm_scurve_sizer_intervals(sz, dv, iv) returns exactly what lsm_scurve_strict_intervals(lim, cycle, dv, iv)
+ * returns. No validation (as there). Any context; the sizer is plain data, owned by the caller.
+ */
+typedef struct lsm_scurve_sizer {
+    lsm_scurve_limits lim;
+    lsm_real cycle_s;
+    lsm_real t1_s;                            /* min(pi J / (2 DJ), sqrt(pi A / (2 DJ))) (eqs 25, 26) */
+    lsm_real jc_mm_s3;                        /* 2 t1 DJ / pi (eq 32) */
+    lsm_real t2a_s;                           /* A / jc - t1 (eq 27) */
+    uint32_t c1_cycles;                       /* t1 rounded to cycles */
+    lsm_real cbrt_skip_s3;                    /* eq 29 cannot bind while pi dv / (4 DJ) stays above this (about t1³) */
+    lsm_real cbrt_x_per_dv;                   /* pi / (4 DJ), rounded down */
+    lsm_real kj_per_dv, ka_per_dv, ks_per_dv; /* the sizing's lower bounds of total cycles, per unit dv */
+} lsm_scurve_sizer;
+
+void lsm_scurve_sizer_init(lsm_scurve_sizer *sz, const lsm_scurve_limits *lim, lsm_real cycle_s);
+bool lsm_scurve_sizer_intervals(const lsm_scurve_sizer *sz, lsm_real dv_mm_s, lsm_scurve_intervals *iv);
+
 /* Intervals for |dv| by either rule (the paper rule's as in Table 1). Returns false on overflow. */
 bool lsm_scurve_rule_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s, lsm_scurve_rule rule,
                                lsm_scurve_intervals *iv);

@@ -8,6 +8,7 @@
  *   never above v_max, the velocity change / the move ends exactly (V(tp) = F; s(T) = D, final setpoint = D),
  *   the per-cycle evaluator (stepgen) matches the closed form at every cycle, and a move is reported
  *   infeasible only when the direct ramp v0 -> v1 alone is longer than D.
+ * The strict sizing (and lsm_scurve_sizer) returns exactly what a scan of its whole candidate window returns.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -20,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "lsm_math.h"
 #include "move.h"
 #include "stepgen.h"
 
@@ -291,6 +293,120 @@ static void test_moves(void **state)
     assert_true(quantised_out * 100 <= planned); /* rare: under 1 % */
 }
 
+/*
+ * Reference of the strict sizing: the whole 5 x 6 window around the continuous guide, every candidate with its
+ * smallest n4, the first of the shortest (ties: the larger eq-34 denominator), as scurve.c scanned it before its
+ * scan learned to skip candidates by lower bounds. The sizing (and the sizer) must return exactly this.
+ */
+static bool ref_within(const lsm_scurve_limits *lim, lsm_real t1, lsm_real t2, lsm_real den, lsm_real dv)
+{
+    const lsm_real jp = dv / den;
+    return jp <= lim->j_max_mm_s3 && jp * (t1 + t2) <= lim->a_max_mm_s2 &&
+           jp * (lsm_real)PI <= 2 * t1 * lim->snap_max_mm_s4;
+}
+
+static bool ref_min_n4(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2, uint32_t *n4)
+{
+    const lsm_real t1 = (lsm_real)n1 * dt, t2 = (lsm_real)n2 * dt, s12 = t1 + t2, den0 = s12 * (2 * t1 + t2);
+    lsm_real cap = lim->j_max_mm_s3;
+    cap = cap < lim->a_max_mm_s2 / (t1 + t2) ? cap : lim->a_max_mm_s2 / (t1 + t2);
+    const lsm_real cs = 2 * t1 * lim->snap_max_mm_s4 / (lsm_real)PI;
+    cap = cap < cs ? cap : cs;
+    const lsm_real need = dv / cap;
+    lsm_real k = 0;
+    if (need > den0) {
+        k = lsm_ceil((need - den0) / (s12 * dt));
+        if (!(k < (lsm_real)0x10000000u))
+            return false;
+    }
+    uint32_t n = (uint32_t)k;
+    for (int g = 0; g < 4 && !ref_within(lim, t1, t2, s12 * (2 * t1 + t2 + (lsm_real)n * dt), dv); g++)
+        n++;
+    *n4 = n;
+    return true;
+}
+
+static uint32_t ref_count(lsm_real x)
+{
+    if (!(x > 0))
+        return 0;
+    return x < (lsm_real)0x10000000u ? (uint32_t)x : 0x10000000u;
+}
+
+static bool ref_strict_intervals(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, lsm_scurve_intervals *iv)
+{
+    iv->n1_cycles = iv->n2_cycles = iv->n4_cycles = 0;
+    const lsm_real P = (lsm_real)PI, A = lim->a_max_mm_s2, J = lim->j_max_mm_s3, DJ = lim->snap_max_mm_s4;
+    lsm_real t1c = P * J / (2 * DJ);
+    const lsm_real t1a = lsm_sqrt(P * A / (2 * DJ));
+    t1c = t1c < t1a ? t1c : t1a;
+    const lsm_real xf = P * dv / (4 * DJ);
+    const lsm_real t1f = lsm_cbrt(xf);
+    t1c = t1c < t1f ? t1c : t1f;
+    const lsm_real jc = 2 * t1c * DJ / P, t2a = A / jc - t1c;
+    const lsm_real r = t1c * t1c / 4 + dv / jc;
+    const lsm_real t2f = lsm_sqrt(r) - 3 * t1c / 2;
+    lsm_real t2c = t2a < t2f ? t2a : t2f;
+    t2c = t2c > 0 ? t2c : 0;
+    const lsm_real y1 = t1c / dt + (lsm_real)0.5, y2 = t2c / dt + (lsm_real)0.5;
+    const uint32_t c1 = ref_count(lsm_floor(y1)), c2 = ref_count(lsm_floor(y2));
+    if (c1 >= 0x10000000u || c2 >= 0x10000000u)
+        return false;
+    const uint32_t n1_lo = c1 > 3 ? c1 - 2 : 1, n1_hi = c1 + 2, n2_lo = c2 > 2 ? c2 - 2 : 0, n2_hi = c2 + 2;
+    uint32_t best_total = 0xFFFFFFFFu;
+    lsm_real best_den = 0;
+    bool found = false;
+    for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
+        for (uint32_t k = 0; k <= n2_hi - n2_lo + 1; k++) {
+            if (k > n2_hi - n2_lo && n2_lo == 0)
+                break;
+            const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
+            uint32_t n4;
+            if (!ref_min_n4(lim, dt, dv, n1, n2, &n4))
+                continue;
+            const uint64_t total = 4ull * n1 + 2ull * n2 + n4;
+            if (total >= 0x10000000u)
+                continue;
+            const lsm_scurve_intervals cand = {n1, n2, n4};
+            const lsm_real den = lsm_scurve_jerk_den(&cand, dt);
+            if (total < best_total || (total == best_total && den > best_den)) {
+                best_total = (uint32_t)total;
+                best_den = den;
+                *iv = cand;
+                found = true;
+            }
+        }
+    }
+    return found;
+}
+
+static void test_sizing_matches_window_scan(void **state)
+{
+    (void)state;
+    rng_state = 0x8CB92BA72F3D8DD7ull ^ (uint64_t)g_seed;
+    for (long c = 0; c < g_count; c++) {
+        /* wide limits (every regime of eqs 25-37, counts from 1 to millions of cycles) */
+        const lsm_scurve_limits lim = {(lsm_real)logu(1, 1e6), (lsm_real)logu(10, 1e8), (lsm_real)logu(10, 1e11)};
+        const lsm_real dt = (lsm_real)(urand() < 0.3 ? logu(1e-5, 0.05) : k_cycles[(int)(urand() * 5) % 5]);
+        const lsm_real dv = (lsm_real)logu(1e-6, 1e4);
+        lsm_scurve_intervals got, want, via;
+        const bool ok_got = lsm_scurve_strict_intervals(&lim, dt, dv, &got);
+        const bool ok_want = ref_strict_intervals(&lim, dt, dv, &want);
+        lsm_scurve_sizer sz;
+        lsm_scurve_sizer_init(&sz, &lim, dt);
+        const bool ok_via = lsm_scurve_sizer_intervals(&sz, dv, &via);
+        CHECK(ok_got == ok_want && ok_via == ok_want, "overflow verdicts differ (%d %d %d)", ok_got, ok_want, ok_via);
+        if (!ok_want)
+            continue;
+        CHECK(got.n1_cycles == want.n1_cycles && got.n2_cycles == want.n2_cycles && got.n4_cycles == want.n4_cycles,
+              "sizing (%u %u %u) != window scan (%u %u %u): A %.17g J %.17g DJ %.17g dt %.17g dv %.17g", got.n1_cycles,
+              got.n2_cycles, got.n4_cycles, want.n1_cycles, want.n2_cycles, want.n4_cycles, (double)lim.a_max_mm_s2,
+              (double)lim.j_max_mm_s3, (double)lim.snap_max_mm_s4, (double)dt, (double)dv);
+        CHECK(via.n1_cycles == got.n1_cycles && via.n2_cycles == got.n2_cycles && via.n4_cycles == got.n4_cycles,
+              "sizer differs from lsm_scurve_strict_intervals");
+    }
+}
+
 int main(int argc, char **argv)
 {
     g_seed = (unsigned long)test_arg_u(argc, argv, 1, g_seed);
@@ -299,6 +415,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_velocity_changes),
         cmocka_unit_test(test_moves),
+        cmocka_unit_test(test_sizing_matches_window_scan),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -26,6 +26,7 @@
 #include "canopen.h"
 #include "cia402_test_od.h"
 #include "motion.h"
+#include "motion_test_node.h"
 
 #define NID 3u
 
@@ -37,15 +38,11 @@
 
 #define PATH_PLANNER LSM_MOTION_PATH_PLANNER
 #define PATH_EXACT LSM_MOTION_PATH_EXACT
-#define LA_BLOCKS 32u
 
 typedef struct app {
     lsm_canopen co;
-    lsm_can_frame txbuf[128];
-    lsm_co_path_block blocks[16];
+    mtn_storage st;
     lsm_motion mo;
-    lsm_pblock la_blocks[LA_BLOCKS];
-    lsm_co_path_block la_saved[LA_BLOCKS + 1u];
     uint32_t cycle_us;
     bool out_enable;
 } app;
@@ -127,31 +124,14 @@ static void boot(uint8_t path_exec, uint16_t master, uint16_t master_ms)
 {
     memset(&g_app, 0, sizeof g_app);
     g_app.cycle_us = 1000;
-    lsm_canopen_config cc = lsm_canopen_default_config();
-    cc.node_id = NID;
-    cc.n_axes = 3;
-    cc.heartbeat_ms = 100;
+    lsm_canopen_config cc = mtn_canopen_config(&g_app.st, NID, 3, 100);
     cc.master_node_id = (uint8_t)master;
     cc.master_timeout_ms = master_ms;
-    cc.tx_storage = g_app.txbuf;
-    cc.tx_cap = 128;
-    cc.path_storage = g_app.blocks;
-    cc.path_cap = 16;
     g_now = 0;
     g_n_sent = 0;
     g_rec.n = 0;
     assert_int_equal(lsm_canopen_init(&g_app.co, &cc, g_now), LSM_OK);
-    lsm_motion_config mc;
-    memset(&mc, 0, sizeof mc);
-    mc.n_axes = 3;
-    mc.cycle_s = (lsm_real)0.001;
-    for (unsigned k = 0; k < 3; k++)
-        mc.lim[k] = k_lim;
-    mc.path_exec = path_exec;
-    mc.feed.blocks = g_app.la_blocks;
-    mc.feed.capacity = LA_BLOCKS;
-    mc.feed.saved = g_app.la_saved;
-    mc.feed.saved_cap = LA_BLOCKS + 1u;
+    lsm_motion_config mc = mtn_motion_config(&g_app.st, 3, &k_lim, path_exec, 0);
     assert_int_equal(lsm_motion_init(&g_app.mo, &mc, &g_app.co), LSM_OK);
     drain();
     const uint8_t start[2] = {0x01, NID};

@@ -33,6 +33,7 @@
 #include "cia402_test_od.h"
 #include "lsm_test_rng.h"
 #include "motion.h"
+#include "motion_test_node.h"
 
 #if LSM_TEST_THREADS
 #include <pthread.h>
@@ -42,18 +43,14 @@
 
 #define NID 3u
 #define AX(idx, k) ((uint16_t)((idx) + 0x800u * (k)))
-#define LA_BLOCKS 32u
 #define LEAD 8u
 #define N_TICKS 20000u
 #define N_BLOCKS 120u
 
 typedef struct app {
     lsm_canopen co;
-    lsm_can_frame txbuf[128];
-    lsm_co_path_block blocks[16];
+    mtn_storage st;
     lsm_motion mo;
-    lsm_pblock la_blocks[LA_BLOCKS];
-    lsm_co_path_block la_saved[LA_BLOCKS + 1u];
     uint32_t now_us;
     uint32_t next_block; /* program block to write next (1-based) */
     uint32_t emcy_ff01;
@@ -157,34 +154,11 @@ static void boot_mode(int8_t mode, uint32_t lead)
 {
     memset(&g_app, 0, sizeof g_app);
     g_app.next_block = 1u;
-    lsm_canopen_config cc = lsm_canopen_default_config();
-    cc.node_id = NID;
-    cc.n_axes = 3;
-    cc.heartbeat_ms = 0;
-    cc.tx_storage = g_app.txbuf;
-    cc.tx_cap = 128;
-    cc.path_storage = g_app.blocks;
-    cc.path_cap = 16;
+    lsm_canopen_config cc = mtn_canopen_config(&g_app.st, NID, 3, 0);
     assert_int_equal(lsm_canopen_init(&g_app.co, &cc, 0u), LSM_OK);
-    lsm_motion_config mc;
-    memset(&mc, 0, sizeof mc);
-    mc.n_axes = 3;
-    mc.cycle_s = (lsm_real)0.001;
-    for (unsigned k = 0; k < 3; k++)
-        mc.lim[k] = k_lim;
-    mc.path_exec = LSM_MOTION_PATH_PLANNER;
-    mc.feed.blocks = g_app.la_blocks;
-    mc.feed.capacity = LA_BLOCKS;
-    mc.feed.saved = g_app.la_saved;
-    mc.feed.saved_cap = LA_BLOCKS + 1u;
-    mc.lead_cycles = lead;
+    lsm_motion_config mc = mtn_motion_config(&g_app.st, 3, &k_lim, LSM_MOTION_PATH_PLANNER, lead);
     assert_int_equal(lsm_motion_init(&g_app.mo, &mc, &g_app.co), LSM_OK);
-    lsm_can_frame f;
-    const uint8_t start[2] = {0x01, NID};
-    memset(&f, 0, sizeof f);
-    f.dlc = 2;
-    memcpy(f.data, start, 2);
-    (void)lsm_canopen_rx(&g_app.co, &f, 0u);
+    mtn_nmt_start(&g_app.co, NID, 0u);
     for (unsigned k = 0; k < 3; k++) {
         set(AX(0x6060, k), 0, mode);
         set(AX(0x6040, k), 0, 0x06);

@@ -35,9 +35,9 @@
 #include "lsm_test_rng.h"
 #include "motion.h"
 #include "pp_check.h"
+#include "motion_test_node.h"
 
 #define NID 3u
-#define LA_BLOCKS 32u
 #define LEAD_NODE 24u       /* the controller image's lead (ctl_motion_cia402.h) */
 #define EVENTS_MAX 12u      /* requests per case */
 #define GAP_MAX 150u        /* cycles between requests */
@@ -49,11 +49,8 @@ static unsigned long long g_seed, g_count;
 
 typedef struct app {
     lsm_canopen co;
-    lsm_can_frame txbuf[128];
-    lsm_co_path_block blocks[16];
+    mtn_storage st;
     lsm_motion mo;
-    lsm_pblock la_blocks[LA_BLOCKS];
-    lsm_co_path_block la_saved[LA_BLOCKS + 1u];
     uint32_t now_us;
     bool estop;
 } app;
@@ -107,36 +104,12 @@ static void draw_limits(uint64_t *r, limits *l)
 static void boot(const limits *l, uint32_t lead)
 {
     memset(&g_app, 0, sizeof g_app);
-    lsm_canopen_config cc = lsm_canopen_default_config();
-    cc.node_id = NID;
-    cc.n_axes = 1;
-    cc.heartbeat_ms = 0;
-    cc.tx_storage = g_app.txbuf;
-    cc.tx_cap = 128;
-    cc.path_storage = g_app.blocks;
-    cc.path_cap = 16;
+    lsm_canopen_config cc = mtn_canopen_config(&g_app.st, NID, 1, 0);
     assert_int_equal(lsm_canopen_init(&g_app.co, &cc, 0u), LSM_OK);
-    lsm_motion_config mc;
-    memset(&mc, 0, sizeof mc);
-    mc.n_axes = 1;
-    mc.cycle_s = (lsm_real)0.001;
-    mc.lim[0].v_max_mm_s = (lsm_real)l->vm;
-    mc.lim[0].a_max_mm_s2 = (lsm_real)l->am;
-    mc.lim[0].j_max_mm_s3 = (lsm_real)l->jm;
-    mc.lim[0].snap_max_mm_s4 = (lsm_real)l->sm;
-    mc.path_exec = LSM_MOTION_PATH_PLANNER;
-    mc.feed.blocks = g_app.la_blocks;
-    mc.feed.capacity = LA_BLOCKS;
-    mc.feed.saved = g_app.la_saved;
-    mc.feed.saved_cap = LA_BLOCKS + 1u;
-    mc.lead_cycles = lead;
+    const lsm_axis_limits lim = {(lsm_real)l->vm, (lsm_real)l->am, (lsm_real)l->jm, (lsm_real)l->sm};
+    lsm_motion_config mc = mtn_motion_config(&g_app.st, 1, &lim, LSM_MOTION_PATH_PLANNER, lead);
     assert_int_equal(lsm_motion_init(&g_app.mo, &mc, &g_app.co), LSM_OK);
-    lsm_can_frame f;
-    memset(&f, 0, sizeof f);
-    f.dlc = 2;
-    f.data[0] = 0x01;
-    f.data[1] = NID;
-    (void)lsm_canopen_rx(&g_app.co, &f, 0u);
+    mtn_nmt_start(&g_app.co, NID, 0u);
     set(0x6060, 0, 1);
     set(0x6040, 0, 0x06);
     set(0x6040, 0, 0x0F);

@@ -68,4 +68,19 @@ static inline void mtn_nmt_start(lsm_canopen *co, uint8_t nid, uint32_t now_us)
     (void)lsm_canopen_rx(co, &f, now_us);
 }
 
+/* One control cycle at now_us in the synchronous order: the E-stop level, lsm_canopen_process, the motion tick,
+ * the demand as feedback (ideal loopback), the TX queue drained, the background run until it is idle. */
+static inline void mtn_sync_cycle(lsm_canopen *co, lsm_motion *mo, uint32_t now_us, bool estop)
+{
+    lsm_canopen_estop(co, estop, now_us);
+    (void)lsm_canopen_process(co, now_us);
+    lsm_motion_tick(mo, co);
+    lsm_motion_feedback(mo, co, NULL, NULL, now_us);
+    lsm_can_frame f;
+    while (lsm_canopen_tx_pop(co, &f)) {
+    }
+    while (lsm_motion_background(mo)) {
+    }
+}
+
 #endif /* MOTION_TEST_NODE_H */

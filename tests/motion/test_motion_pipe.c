@@ -356,14 +356,7 @@ static void pp_run(uint32_t lead, lsm_real *out)
         if (n == 12u)
             set(AX(0x6040, 0), 0, 0x2F);
         g_app.now_us += 1000u;
-        (void)lsm_canopen_process(&g_app.co, g_app.now_us);
-        lsm_motion_tick(&g_app.mo, &g_app.co);
-        lsm_motion_feedback(&g_app.mo, &g_app.co, NULL, NULL, g_app.now_us);
-        lsm_can_frame f;
-        while (lsm_canopen_tx_pop(&g_app.co, &f)) {
-        }
-        while (lsm_motion_background(&g_app.mo)) {
-        }
+        mtn_sync_cycle(&g_app.co, &g_app.mo, g_app.now_us, false);
         out[n] = lsm_motion_demand(&g_app.mo, 0)->s_mm;
     }
 }

@@ -66,15 +66,7 @@ static void set(uint16_t idx, uint8_t sub, int64_t v)
 static void cycle(void)
 {
     g_app.now_us += 1000u;
-    lsm_canopen_estop(&g_app.co, g_app.estop, g_app.now_us);
-    (void)lsm_canopen_process(&g_app.co, g_app.now_us);
-    lsm_motion_tick(&g_app.mo, &g_app.co);
-    lsm_motion_feedback(&g_app.mo, &g_app.co, NULL, NULL, g_app.now_us);
-    lsm_can_frame f;
-    while (lsm_canopen_tx_pop(&g_app.co, &f)) {
-    }
-    while (lsm_motion_background(&g_app.mo)) {
-    }
+    mtn_sync_cycle(&g_app.co, &g_app.mo, g_app.now_us, g_app.estop);
     pp_check_kin2(&g_chk, lsm_motion_demand(&g_app.mo, 0), g_app.mo.ax[0].prof.mode == LSM_AXPROF_MOVE);
     g_cycles++;
 }

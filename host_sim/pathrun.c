@@ -528,6 +528,20 @@ static double gpath_next_stop(void *ctx, double s)
 
 static void gpath_exact(const gpath *gp, double s, double q[SIM_VPOP_AXES], double t[3]);
 
+/* The block of gp that holds arc length s (binary search on the block starts). */
+static size_t vp_block_at(const gpath *gp, double s)
+{
+    size_t lo = 0, hi = gp->n;
+    while (hi - lo > 1) {
+        const size_t mid = (lo + hi) / 2;
+        if (gp->s0[mid] <= s)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 /* The block holding s (the last one whose start is <= s); the last answer is tried first (the searches stay
  * local). */
 static size_t gpath_block(gpath *gp, double s)
@@ -537,16 +551,7 @@ static size_t gpath_block(gpath *gp, double s)
         return h;
     if (h + 1 < gp->n && gp->s0[h + 1] <= s && (h + 2 == gp->n || s < gp->s0[h + 2]))
         return gp->hint = h + 1;
-    size_t lo = 0, hi = gp->n;
-    while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (gp->s0[mid] <= s)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    gp->hint = lo;
-    return lo;
+    return gp->hint = vp_block_at(gp, s);
 }
 
 /* Positions (and dq/ds if d) from the Hermite table; A B C from the blocks if the machine has them. */
@@ -606,14 +611,7 @@ static void gpath_eval(void *ctx, double s, double q[SIM_VPOP_AXES])
 
 static void gpath_exact(const gpath *gp, double s, double q[SIM_VPOP_AXES], double t[3])
 {
-    size_t lo = 0, hi = gp->n;
-    while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (gp->s0[mid] <= s)
-            lo = mid;
-        else
-            hi = mid;
-    }
+    const size_t lo = vp_block_at(gp, s);
     lsm_real pos[LSM_MAX_AXES];
     pos[3] = (lsm_real)gp->rot[3 * lo];
     pos[4] = (lsm_real)gp->rot[3 * lo + 1];
@@ -647,14 +645,7 @@ static int cmp_double(const void *a, const void *b)
  * tangent and curvature vector of the geometry, q_sss from a central difference of q_ss within the block), against the limits lim. */
 static double vp_jerk_ratio(const gpath *gp, const sim_vpop_limits *lim, double s, double v, double a, double j)
 {
-    size_t lo = 0, hi = gp->n;
-    while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (gp->s0[mid] <= s)
-            lo = mid;
-        else
-            hi = mid;
-    }
+    const size_t lo = vp_block_at(gp, s);
     const lsm_geom *g = &gp->g[lo];
     const double len = (double)g->len, u = fmin(len, fmax(0, s - gp->s0[lo]));
     lsm_real pos[LSM_MAX_AXES] = {0}, t[3], c[3], c1[3], c2[3];
@@ -769,20 +760,6 @@ static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const d
 #define VP_TAB_MAX_TURN_RAD 0.02     /* and at most this turning per interval (tiny, tight clothoids) */
 #define VP_TAB_MAX_INTERVALS 1e6     /* per block */
 #define VP_DEFAULT_MAX_TIME_S 3600.0 /* VPOp's motion is cut off after this (unless --max-time says otherwise) */
-
-/* The block of gp that holds arc length s (binary search on the block starts). */
-static size_t vp_block_at(const gpath *gp, double s)
-{
-    size_t lo = 0, hi = gp->n;
-    while (hi - lo > 1) {
-        const size_t mid = (lo + hi) / 2;
-        if (gp->s0[mid] <= s)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
-}
 
 /* The program through the look-ahead planner (its geometry: lines, arcs, corner clothoids; VPOp then plans the
  * motion along it). Returns 0, or -1 with r->err set. */
@@ -1005,7 +982,7 @@ static size_t vp_cont_revert(gpath *gp, const double *binmax, const double *good
 }
 
 /* Stage 2 (gp->jsc: the scales of the motion *S, which holds). */
-static void vp_cont_local(const sim_run_opts *o, const sim_vpop_path *path, gpath *gp, const sim_vpop_limits *lim,
+static void vp_cont_local(const sim_run_opts *o, const sim_vpop_path *path, gpath *gp, sim_vpop_limits *lim,
                           double cycle_s, double **S, size_t *n)
 {
     double *binmax = malloc(gp->n_jsc * sizeof *binmax), *good = malloc(gp->n_jsc * sizeof *good);
@@ -1020,7 +997,7 @@ static void vp_cont_local(const sim_run_opts *o, const sim_vpop_path *path, gpat
                 break;
             double *S2 = NULL;
             size_t n2 = 0;
-            vp_best_motion(o, path, (sim_vpop_limits *)lim, cycle_s, &S2, &n2);
+            vp_best_motion(o, path, lim, cycle_s, &S2, &n2);
             if (!S2)
                 break;
             const double wr = vpop_cont_scan(gp, binmax, lim, S2, n2, cycle_s);

@@ -92,15 +92,9 @@ static int add_element(sim_prog *p, const lsm_gcode_block *b)
         return 0;
     }
     const size_t held = p->np - p->e0;
-    size_t c1 = p->pcap, c2 = p->pcap, c3 = p->pcap;
-    if (grow((void **)&p->path, &c1, held + 1, sizeof *p->path) ||
-        grow((void **)&p->s0, &c2, held + 1, sizeof *p->s0) ||
-        grow((void **)&p->pline, &c3, held + 1, sizeof *p->pline))
+    if (grow((void **)&p->path, &p->pcap, held + 1, sizeof *p->path))
         return -1;
-    p->pcap = c1 < c2 ? (c1 < c3 ? c1 : c3) : (c2 < c3 ? c2 : c3);
-    p->path[held] = gg;
-    p->s0[held] = s;
-    p->pline[held] = b->line;
+    p->path[held] = (sim_prog_elem){gg, s, b->line};
     p->np++;
     return 0;
 }
@@ -310,8 +304,6 @@ void sim_prog_trim(sim_prog *p, size_t keep_block, size_t keep_elem)
     if (de >= SIM_PROG_TRIM_MIN && de >= p->np - keep_elem) {
         const size_t rest = p->np - keep_elem;
         memmove(p->path, p->path + de, rest * sizeof *p->path);
-        memmove(p->s0, p->s0 + de, rest * sizeof *p->s0);
-        memmove(p->pline, p->pline + de, rest * sizeof *p->pline);
         p->e0 = keep_elem;
     }
 }
@@ -321,8 +313,6 @@ void sim_prog_free(sim_prog *p)
     free(p->v);
     free(p->ev);
     free(p->path);
-    free(p->s0);
-    free(p->pline);
     free(p->g);
     free(p->res);
     free(p->buf);
@@ -398,7 +388,7 @@ double sim_prog_distance(const lsm_geom *g, const double x[3])
 
 static double elem_s0(const sim_prog *p, size_t i)
 {
-    return i < p->np ? p->s0[i - p->e0] : p->s_next;
+    return i < p->np ? p->path[i - p->e0].s0 : p->s_next;
 }
 
 double sim_prog_deviation(const sim_prog *p, const double x[3], uint32_t line, double reach_mm, size_t *lo_out)
@@ -411,13 +401,13 @@ double sim_prog_deviation(const sim_prog *p, const double x[3], uint32_t line, d
     size_t lo = p->e0, hi = p->np;
     while (hi - lo > 1) {
         const size_t mid = (lo + hi) / 2;
-        if (p->pline[mid - p->e0] <= line)
+        if (p->path[mid - p->e0].line <= line)
             lo = mid;
         else
             hi = mid;
     }
     const size_t e = lo;
-    if (p->e0 > 0 && p->pline[0] > line)
+    if (p->e0 > 0 && p->path[0].line > line)
         return -1; /* its element is gone */
     const double s_lo = elem_s0(p, e) - reach_mm, s_hi = elem_s0(p, e + 1) + reach_mm;
     const size_t back = 2 * LSM_ARCFIT_MAX + 4;
@@ -430,7 +420,7 @@ double sim_prog_deviation(const sim_prog *p, const double x[3], uint32_t line, d
         b++;
     double best = INFINITY;
     for (size_t i = a; i <= b; i++) {
-        const double d = sim_prog_distance(&p->path[i - p->e0], x);
+        const double d = sim_prog_distance(&p->path[i - p->e0].g, x);
         if (d < best)
             best = d;
     }

@@ -47,14 +47,19 @@ typedef struct sim_run_mfunc {
     double t_s;          /* machine time when it ran (s); -1: not run (the VPOp reference runs no events) */
 } sim_run_mfunc;
 
+/* An element of the programmed path: a block's X Y Z geometry, where it starts along the path, its source line. */
+typedef struct sim_prog_elem {
+    lsm_geom g;
+    double s0; /* cumulative length at its start (mm) */
+    uint32_t line;
+} sim_prog_elem;
+
 typedef struct sim_prog {
     /* blocks [v0, n) are held, v[i - v0] */
     sim_prog_block *v;
     size_t v0, n, cap;
-    /* path elements [e0, np) are held: path[i - e0] starts at s0[i - e0] (cumulative length) */
-    lsm_geom *path;
-    double *s0;
-    uint32_t *pline; /* source line of each element */
+    /* path elements [e0, np) are held, path[i - e0] */
+    sim_prog_elem *path;
     size_t e0, np, pcap;
     double s_next;     /* cumulative length at the end of the last element */
     sim_run_mfunc *ev; /* every machine function, in order */

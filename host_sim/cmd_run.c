@@ -126,6 +126,15 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         json_num(f, r->intersample_jerk_p99);
         fprintf(f, "},\n");
     }
+    if (r->cont_ratio[0] >= 0) {
+        fprintf(f, "  \"continuous_ratio\": {\"v\": ");
+        json_num(f, r->cont_ratio[0]);
+        fprintf(f, ", \"a\": ");
+        json_num(f, r->cont_ratio[1]);
+        fprintf(f, ", \"j\": ");
+        json_num(f, r->cont_ratio[2]);
+        fprintf(f, "},\n");
+    }
     if (o->planner == SIM_RUN_VPOP_CONT) {
         fprintf(f, "  \"continuous_jerk_ratio\": ");
         json_num(f, r->cont_jerk_max);
@@ -267,8 +276,10 @@ int cmd_run(int argc, char **argv)
         o.planner = SIM_RUN_VPOP;
     else if (strcmp(planner, "vpop-cont") == 0)
         o.planner = SIM_RUN_VPOP_CONT;
+    else if (strcmp(planner, "vpop-cstep") == 0)
+        o.planner = SIM_RUN_VPOP_CSTEP;
     else {
-        fprintf(stderr, "error: --planner must be lissom, vpop or vpop-cont\n");
+        fprintf(stderr, "error: --planner must be lissom, vpop, vpop-cont or vpop-cstep\n");
         return 2;
     }
     if (!(ovr > 0 && ovr <= 2)) {

@@ -754,6 +754,273 @@ static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const d
     return vpop_cont_scan(gp, NULL, lim, S, n, dt);
 }
 
+/*
+ * The continuous-limit reference (pathrun.h: SIM_RUN_VPOP_CSTEP): VPOp whose every step is also checked between its
+ * samples (vpop.h: step_cont).
+ *
+ * Interpolation model. The motion between the samples is s(t) = the uniform cubic B-spline whose control points are
+ * the samples S_k (at rest before and after: 0 .. 0, S_0 .. S_n-1 = L, L .. L), i.e. the triple integrator driven by
+ * the step's own discrete jerk held over one cycle: on the segment that step j+1 adds (control points s_j-2, s_j-1,
+ * s_j, s_j+1; u in [0, 1] over one cycle dt)
+ *     s''' = (s_j+1 - 3 s_j + 3 s_j-1 - s_j-2) / dt³ (VPOp's discrete jerk, constant over the cycle),
+ *     s''  = ((1-u) (s_j-2 - 2 s_j-1 + s_j) + u (s_j-1 - 2 s_j + s_j+1)) / dt² (its two discrete accelerations),
+ *     s'   the quadratic B-spline of its three discrete velocities, s the cubic one.
+ * s is C2 in t and passes through (S_k-1 + 4 S_k + S_k+1) / 6 at the cycle times (within a dt² / 6 of S_k), and
+ * the motion takes the same n cycles as the samples. Each axis then moves as (Beudaert eq 3)
+ *     q' = C' s',  q'' = C'' s'² + C' s'',  q''' = C''' s'³ + 3 C'' s' s'' + C' s'''
+ * with C' the exact tangent and C'' the exact curvature vector of the block at s (lsm_geom_eval), C''' in closed form
+ * (vp_cstep_c3). The step passes if |q'| <= V, |q''| <= A, |q'''| <= J for every axis at VP_CSTEP_POINTS + 1
+ * equally spaced u, at VP_CSTEP_BLOCK_POINTS points inside every curved block it overlaps, and on both sides of
+ * every block junction inside the segment (the
+ * curvature may jump there: the acceleration then jumps, and the jerk is held on each block up to its end). Inside
+ * one line block the check is implied by the discrete bounds VPOp already holds on the same four samples (the
+ * B-spline's v, a, j are convex combinations of the discrete ones there), so it is skipped.
+ */
+#define VP_CSTEP_POINTS 16      /* points per cycle where a step's motion is checked (plus the junctions inside it) */
+#define VP_CSTEP_BLOCK_POINTS 4 /* and this many inside every curved block it overlaps (short corner blocks) */
+
+/* s, s', s'', s''' at u in [0, 1] of the B-spline segment with control points P (one cycle dt). */
+static void vp_bs_eval(const double P[4], double u, double dt, double d[4])
+{
+    const double w = 1 - u, u2 = u * u, u3 = u2 * u;
+    d[0] = (w * w * w * P[0] + (3 * u3 - 6 * u2 + 4) * P[1] + (-3 * u3 + 3 * u2 + 3 * u + 1) * P[2] + u3 * P[3]) / 6;
+    d[1] = (-3 * w * w * P[0] + (9 * u2 - 12 * u) * P[1] + (-9 * u2 + 6 * u + 3) * P[2] + 3 * u2 * P[3]) / (6 * dt);
+    d[2] = (w * P[0] + (3 * u - 2) * P[1] + (1 - 3 * u) * P[2] + u * P[3]) / (dt * dt);
+    d[3] = (P[3] - 3 * P[2] + 3 * P[1] - P[0]) / (dt * dt * dt);
+}
+
+/* C''' of an arc or clothoid at offset u, from its tangent t and curvature vector c2 (|c2|^2 = k2): a clothoid in
+ * the plane (e1, e2) with curvature k = k0 + c u turns its normal N = c2 / k as N' = -k T, so C''' = c N - k^2 T; an
+ * arc (a helix of radius R about n = e1 x e2) has C''' = -(|C''| / R) (T - (T.n) n) (-T / R^2 in the plane). */
+static void vp_cstep_c3(const lsm_geom *g, double u, const double t[3], const double c2[3], double k2, double c3[3])
+{
+    if (g->kind == LSM_GEOM_CLOTHOID) {
+        const lsm_geom_clothoid *c = &g->u.clo;
+        const double k = (double)c->kappa0_per_mm + (double)c->c_per_mm2 * u;
+        double nv[3];
+        if (fabs(k) > 1e-9) {
+            for (int i = 0; i < 3; i++)
+                nv[i] = c2[i] / k;
+        } else {
+            const double th = (double)c->theta0_rad + u * ((double)c->kappa0_per_mm + 0.5 * (double)c->c_per_mm2 * u);
+            for (int i = 0; i < 3; i++)
+                nv[i] = -sin(th) * (double)c->e1[i] + cos(th) * (double)c->e2[i];
+        }
+        for (int i = 0; i < 3; i++)
+            c3[i] = (double)c->c_per_mm2 * nv[i] - k2 * t[i];
+        return;
+    }
+    const lsm_geom_arc *a = &g->u.arc;
+    const double n[3] = {(double)(a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1]),
+                         (double)(a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2]),
+                         (double)(a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0])};
+    const double tn = t[0] * n[0] + t[1] * n[1] + t[2] * n[2], f = sqrt(k2) / (double)a->radius_mm;
+    for (int i = 0; i < 3; i++)
+        c3[i] = -f * (t[i] - tn * n[i]);
+}
+
+/* The B-spline segment P where it passes path point x in [s(0), s(1)]: Newton on u, kept inside a bracket that
+ * bisection narrows when a step leaves it (s is monotone in u, as the samples are). */
+static void vp_bs_at(const double P[4], double dt, double x, double d[4])
+{
+    double lo = 0, hi = 1, u = 0.5;
+    vp_bs_eval(P, 0, dt, d);
+    const double s0 = d[0];
+    vp_bs_eval(P, 1, dt, d);
+    if (d[0] > s0)
+        u = fmin(1, fmax(0, (x - s0) / (d[0] - s0)));
+    for (int it = 0; it < 60; it++) {
+        vp_bs_eval(P, u, dt, d);
+        const double f = d[0] - x;
+        if (fabs(f) <= 1e-15 * (1 + fabs(x)) || hi - lo < 1e-15)
+            return;
+        if (f < 0)
+            lo = u;
+        else
+            hi = u;
+        const double du = d[1] * dt, nu = du > 0 ? u - f / du : -1;
+        u = nu > lo && nu < hi ? nu : 0.5 * (lo + hi);
+    }
+}
+
+/* The largest |q_i'| / V_i, |q_i''| / A_i, |q_i'''| / J_i over the constrained axes (into r[0..2], raised) of the
+ * motion at offset x of block blk with s' s'' s''' = d[1..3] (eq 3, above). */
+static void vp_cstep_ratio(const gpath *gp, const sim_vpop_limits *lim, size_t blk, double x, const double d[4],
+                           double r[3])
+{
+    const lsm_geom *g = &gp->g[blk];
+    const double len = (double)g->len, u = fmin(len, fmax(0, x));
+    double t[LSM_MAX_AXES] = {0}, c2[LSM_MAX_AXES] = {0}, c3[LSM_MAX_AXES] = {0};
+    if (g->kind == LSM_GEOM_LINE) {
+        for (int i = 0; i < LSM_MAX_AXES; i++)
+            t[i] = (double)g->u.line.dir[i];
+    } else {
+        lsm_real tr[3], cr[3];
+        lsm_geom_eval(g, (lsm_real)u, NULL, tr, cr);
+        double k2 = 0;
+        for (int i = 0; i < 3; i++) {
+            t[i] = (double)tr[i];
+            c2[i] = (double)cr[i];
+            k2 += c2[i] * c2[i];
+        }
+        vp_cstep_c3(g, u, t, c2, k2, c3);
+    }
+    const double v = d[1], a = d[2], j = d[3];
+    for (int i = 0; i < SIM_VPOP_AXES; i++) {
+        if (!(lim->axis_mask & (1u << i)))
+            continue;
+        r[0] = fmax(r[0], fabs(t[i] * v) / lim->v[i]);
+        r[1] = fmax(r[1], fabs(c2[i] * v * v + t[i] * a) / lim->a[i]);
+        r[2] = fmax(r[2], fabs(c3[i] * v * v * v + 3 * c2[i] * v * a + t[i] * j) / lim->j[i]);
+    }
+}
+
+/* The block holding s, searched forward from block b (s >= its start). */
+static size_t vp_block_from(const gpath *gp, size_t b, double s)
+{
+    while (b + 1 < gp->n && gp->s0[b + 1] <= s)
+        b++;
+    return b;
+}
+
+/* Whether the segment with control points P holds the limits (checked as above; stops at the first point that
+ * does not). */
+static int vp_cstep_segment(const gpath *gp, const sim_vpop_limits *lim, double dt, const double P[4])
+{
+    const size_t b0 = vp_block_at(gp, P[0]);
+    if (gp->g[b0].kind == LSM_GEOM_LINE && vp_block_from(gp, b0, P[3]) == b0)
+        return 1; /* implied by the discrete bounds (above) */
+    double r[3] = {0, 0, 0}, d[4];
+    size_t b = b0;
+    for (int m = 0; m <= VP_CSTEP_POINTS; m++) {
+        vp_bs_eval(P, (double)m / VP_CSTEP_POINTS, dt, d);
+        b = vp_block_from(gp, b, d[0]);
+        vp_cstep_ratio(gp, lim, b, d[0] - gp->s0[b], d, r);
+        if (r[0] > 1 || r[1] > 1 || r[2] > 1)
+            return 0;
+    }
+    double e0[4], e1[4];
+    vp_bs_eval(P, 0, dt, e0);
+    vp_bs_eval(P, 1, dt, e1);
+    for (size_t k = vp_block_from(gp, b0, e0[0]); k < gp->n && gp->s0[k] < e1[0]; k++) {
+        const double ka = fmax(gp->s0[k], e0[0]), kb = fmin(gp->s0[k] + (double)gp->g[k].len, e1[0]);
+        for (int m = 0; gp->g[k].kind != LSM_GEOM_LINE && m < VP_CSTEP_BLOCK_POINTS; m++) {
+            vp_bs_at(P, dt, ka + (kb - ka) * (m + 0.5) / VP_CSTEP_BLOCK_POINTS, d);
+            vp_cstep_ratio(gp, lim, k, d[0] - gp->s0[k], d, r);
+        }
+        if (gp->s0[k] > e0[0] && k > 0) {
+            vp_bs_at(P, dt, gp->s0[k], d); /* the junction, on both sides */
+            vp_cstep_ratio(gp, lim, k - 1, (double)gp->g[k - 1].len, d, r);
+            vp_cstep_ratio(gp, lim, k, 0, d, r);
+        }
+        if (r[0] > 1 || r[1] > 1 || r[2] > 1)
+            return 0;
+    }
+    return 1;
+}
+
+/* sim_vpop_path.step_cont of the continuous-limit reference. */
+static int gpath_step_cont(void *ctx, const sim_vpop_limits *lim, double dt, const double s4[4])
+{
+    return vp_cstep_segment(ctx, lim, dt, s4);
+}
+
+/*
+ * The independent check of a motion's continuous limits (run --json: continuous_ratio): the B-spline s(t) of the
+ * samples (the model above) resampled VP_VERIFY_PER_CYCLE times per cycle, the axis positions there from the exact
+ * geometry (lsm_geom_eval, no derivatives), and their backward differences over that fine step h: velocity,
+ * acceleration and jerk over the limits (r[0..2]), largest over the whole motion. A jerk difference whose four points
+ * are not all in one block is left out (where the curvature jumps at a junction the acceleration steps, and its
+ * difference grows as 1 / h; the jerk on both sides is measured up to 3 h from the junction). For the jerk the
+ * positions are taken relative to the block (its geometry moved to start at the origin, the offset into it computed
+ * in long double from the control points relative to the block's start; lines evaluated in long double), so that
+ * their rounding is not that of the coordinates or of s: about 8 eps (R + chord) / (J h³) on arcs and clothoids
+ * (eps of double) and 8 eps_ld len / (J h³) on lines (eps_ld = 1.1e-19; below 1e-7).
+ */
+#define VP_VERIFY_PER_CYCLE 32
+
+/* Position at path point P-spline u (control points P) of block blk: absolute (q) and relative to the block (qr). */
+static void vp_verify_pos(const gpath *gp, const double P[4], double u, double dt, size_t *blk, double q[LSM_MAX_AXES],
+                          long double qr[LSM_MAX_AXES])
+{
+    double d[4];
+    vp_bs_eval(P, u, dt, d);
+    const size_t lo = vp_block_at(gp, d[0]);
+    /* the offset into the block, in long double from the control points relative to the block's start */
+    const long double w = 1 - (long double)u, U = u;
+    long double offl =
+        (w * w * w * (P[0] - gp->s0[lo]) + (3 * U * U * U - 6 * U * U + 4) * (P[1] - gp->s0[lo]) +
+         (-3 * U * U * U + 3 * U * U + 3 * U + 1) * (P[2] - gp->s0[lo]) + U * U * U * (P[3] - gp->s0[lo])) /
+        6;
+    offl = offl < 0 ? 0 : offl > (long double)gp->g[lo].len ? (long double)gp->g[lo].len : offl;
+    const double off = (double)offl;
+    lsm_real pos[LSM_MAX_AXES] = {0};
+    pos[3] = (lsm_real)gp->rot[3 * lo];
+    pos[4] = (lsm_real)gp->rot[3 * lo + 1];
+    pos[5] = (lsm_real)gp->rot[3 * lo + 2];
+    lsm_geom_eval(&gp->g[lo], (lsm_real)off, pos, NULL, NULL);
+    lsm_geom g = gp->g[lo]; /* the block moved to the origin */
+    if (g.kind == LSM_GEOM_LINE)
+        memset(g.u.line.p0, 0, sizeof g.u.line.p0);
+    else if (g.kind == LSM_GEOM_ARC)
+        memset(g.u.arc.start_mm, 0, sizeof g.u.arc.start_mm);
+    else
+        memset(g.u.clo.origin_mm, 0, sizeof g.u.clo.origin_mm);
+    lsm_real pr[LSM_MAX_AXES] = {0};
+    lsm_geom_eval(&g, (lsm_real)off, pr, NULL, NULL);
+    for (int i = 0; i < LSM_MAX_AXES; i++) {
+        q[i] = (double)pos[i];
+        qr[i] = g.kind == LSM_GEOM_LINE ? (long double)g.u.line.dir[i] * offl : (long double)pr[i];
+    }
+    *blk = lo;
+}
+
+static void vp_cont_verify(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt,
+                           double r[3])
+{
+    r[0] = r[1] = r[2] = 0;
+    if (n == 0)
+        return;
+    const double h = dt / VP_VERIFY_PER_CYCLE;
+    double q[4][LSM_MAX_AXES]; /* [0] newest */
+    long double qr[4][LSM_MAX_AXES];
+    size_t blk[4];
+    const double P0[4] = {0, 0, 0, 0};
+    vp_verify_pos(gp, P0, 0, dt, &blk[1], q[1], qr[1]);
+    for (int m = 2; m < 4; m++) {
+        memcpy(q[m], q[1], sizeof q[1]);
+        memcpy(qr[m], qr[1], sizeof qr[1]);
+        blk[m] = blk[1];
+    }
+    const long last = ((long)n + 2) * VP_VERIFY_PER_CYCLE + 3; /* at rest on L from (n + 2) K on */
+    for (long i = 1; i <= last; i++) {
+        const long k = i / VP_VERIFY_PER_CYCLE;
+        double P[4];
+        for (int m = 0; m < 4; m++) {
+            const long c = k - 3 + m;
+            P[m] = c < 0 ? 0 : S[c >= (long)n ? (long)n - 1 : c];
+        }
+        vp_verify_pos(gp, P, (double)(i % VP_VERIFY_PER_CYCLE) / VP_VERIFY_PER_CYCLE, dt, &blk[0], q[0], qr[0]);
+        for (int a = 0; a < SIM_VPOP_AXES; a++) {
+            if (!(lim->axis_mask & (1u << a)))
+                continue;
+            r[0] = fmax(r[0], fabs(q[0][a] - q[1][a]) / h / lim->v[a]);
+            r[1] = fmax(r[1], fabs(q[0][a] - 2 * q[1][a] + q[2][a]) / (h * h) / lim->a[a]);
+            if (blk[0] == blk[3]) {
+                const double rj =
+                    (double)fabsl(qr[0][a] - 3 * qr[1][a] + 3 * qr[2][a] - qr[3][a]) / (h * h * h) / lim->j[a];
+                if (rj > r[2] && getenv("VPOP_DEBUG") && rj > 1)
+                    fprintf(stderr, "verify: j %.9f axis %d block %zu kind %d len %.6g k %ld\n", rj, a, blk[0],
+                            gp->g[blk[0]].kind, (double)gp->g[blk[0]].len, k);
+                r[2] = fmax(r[2], rj);
+            }
+        }
+        memmove(q[1], q[0], 3 * sizeof q[0]);
+        memmove(qr[1], qr[0], 3 * sizeof qr[0]);
+        memmove(&blk[1], &blk[0], 3 * sizeof blk[0]);
+    }
+}
+
 /* The Hermite table of the path (gpath). */
 #define VP_TAB_STEP_MM 0.004         /* node spacing: the table is within 6e-10 mm of the exact clothoids */
 #define VP_TAB_MAX_NODES 2e6         /* coarser steps on long paths, so that the table stays about 2e6 nodes */
@@ -1115,7 +1382,9 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
         goto done;
     }
     vp_gpath_table(&gp);
-    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL};
+    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL, NULL};
+    if (o->planner == SIM_RUN_VPOP_CSTEP)
+        path.step_cont = gpath_step_cont;
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
     for (int i = 0; i < o->machine->n_axes; i++) {
@@ -1140,6 +1409,7 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
         goto done;
     vpop_intersample(&gp, &lim, S, n, cfg.cycle_s, r);
     r->cont_jerk_max = vpop_cont_max(&gp, &lim, S, n, cfg.cycle_s);
+    vp_cont_verify(&gp, &lim, S, n, cfg.cycle_s, r->cont_ratio);
     if (o->planner != SIM_RUN_VPOP_CONT)
         r->vpop_jerk_scale = 1;
     r->cycles = n;
@@ -1168,6 +1438,7 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     r->pl_block_bytes = (uint32_t)sizeof(lsm_pblock);
     r->intersample_jerk_max = r->intersample_jerk_p99 = -1;
     r->cont_jerk_max = r->vpop_jerk_scale = -1;
+    r->cont_ratio[0] = r->cont_ratio[1] = r->cont_ratio[2] = -1;
     const sim_machine *m = o->machine;
     r->cycle_s = m->cycle_s;
     r->n_axes = m->n_axes;

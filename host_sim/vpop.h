@@ -44,6 +44,8 @@
 
 #define SIM_VPOP_AXES 6
 
+struct sim_vpop_limits;
+
 typedef struct sim_vpop_path {
     double length;                                              /* L (mm) */
     void (*eval)(void *ctx, double s, double q[SIM_VPOP_AXES]); /* positions at s in [0, L] */
@@ -59,6 +61,13 @@ typedef struct sim_vpop_path {
      * its limits between its samples lowers its jerk where its motion exceeds them there: pathrun.c, vpop-cont).
      * NULL: 1 everywhere. */
     double (*jscale)(void *ctx, double s);
+    /* optional: the continuous check of a step (a reference held to its limits between its samples: pathrun.c,
+     * vpop-cstep). s4 = {s_j-2, s_j-1, s_j, s}: the history and the candidate s_j+1; returns 1 if the motion between
+     * the samples that this step defines holds the limits lim continuously. Every candidate (the forward step, the
+     * braking sequences, the switching step) must pass it as well as the discrete bounds: where an end of the
+     * discrete set fails, the searches move inwards to the last point that passes (a grid of CONT_GRID points, then
+     * bisection). NULL: no continuous check (plain VPOp). */
+    int (*step_cont)(void *ctx, const struct sim_vpop_limits *lim, double dt, const double s4[4]);
 } sim_vpop_path;
 
 typedef struct sim_vpop_limits {

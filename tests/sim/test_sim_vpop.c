@@ -144,7 +144,7 @@ static void run_line(const double dir[3], double D, const double V[3], const dou
                      double dt)
 {
     line l = {{dir[0], dir[1], dir[2]}, D, F};
-    sim_vpop_path p = {D, line_eval, F > 0 ? line_feed : NULL, &l, line_eval_d, NULL, NULL};
+    sim_vpop_path p = {D, line_eval, F > 0 ? line_feed : NULL, &l, line_eval_d, NULL, NULL, NULL};
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
     double Vt = INFINITY, At = INFINITY, Jt = INFINITY;
@@ -198,7 +198,7 @@ static void test_fig3(void **state)
     (void)state;
     const double F = 5000.0 / 60;
     line l = {{1, 0, 0}, 100, F};
-    sim_vpop_path p = {100, line_eval, line_feed, &l, line_eval_d, NULL, NULL};
+    sim_vpop_path p = {100, line_eval, line_feed, &l, line_eval_d, NULL, NULL, NULL};
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
     lim.axis_mask = 1;

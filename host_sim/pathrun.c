@@ -503,6 +503,7 @@ typedef struct gpath {
     double *jsc; /* vpop-cont: the jerk scale per bin of jsc_bin_mm along the path (vp_cont_motion) */
     size_t n_jsc;
     double jsc_bin_mm;
+    double *cbound; /* vpop-cstep: per block, the largest |C''| and a bound of |C'''| on it (vp_cstep_bounds) */
 } gpath;
 
 static double gpath_jscale(void *ctx, double s)
@@ -819,28 +820,49 @@ static void vp_cstep_c3(const lsm_geom *g, double u, const double t[3], const do
         c3[i] = -f * (t[i] - tn * n[i]);
 }
 
-/* The B-spline segment P where it passes path point x in [s(0), s(1)]: Newton on u, kept inside a bracket that
- * bisection narrows when a step leaves it (s is monotone in u, as the samples are). */
-static void vp_bs_at(const double P[4], double dt, double x, double d[4])
+/* The segment as a polynomial in u: s = c0 + c1 u + c2 u² + c3 u³, c0 = (P0 + 4 P1 + P2) / 6, c1 = (P2 - P0) / 2,
+ * c2 = (P0 - 2 P1 + P2) / 2, c3 = (P3 - 3 P2 + 3 P1 - P0) / 6 (the same curve as vp_bs_eval). */
+typedef struct vp_bspoly {
+    double c[4], dt;
+} vp_bspoly;
+
+static vp_bspoly vp_bs_poly(const double P[4], double dt)
 {
-    double lo = 0, hi = 1, u = 0.5;
-    vp_bs_eval(P, 0, dt, d);
-    const double s0 = d[0];
-    vp_bs_eval(P, 1, dt, d);
-    if (d[0] > s0)
-        u = fmin(1, fmax(0, (x - s0) / (d[0] - s0)));
+    const vp_bspoly b = {{(P[0] + 4 * P[1] + P[2]) / 6, (P[2] - P[0]) / 2, (P[0] - 2 * P[1] + P[2]) / 2,
+                          (P[3] - 3 * P[2] + 3 * P[1] - P[0]) / 6},
+                         dt};
+    return b;
+}
+
+static void vp_bs_poly_eval(const vp_bspoly *b, double u, double d[4])
+{
+    const double *c = b->c, dt = b->dt;
+    d[0] = c[0] + u * (c[1] + u * (c[2] + u * c[3]));
+    d[1] = (c[1] + u * (2 * c[2] + 3 * u * c[3])) / dt;
+    d[2] = (2 * c[2] + 6 * u * c[3]) / (dt * dt);
+    d[3] = 6 * c[3] / (dt * dt * dt);
+}
+
+/* The segment b where it passes path point x in [s(0), s(1)]: Newton on u from *u (the last point's u, or < 0: a
+ * linear guess), kept inside a bracket that bisection narrows when a step leaves it (s is monotone in u, as the
+ * samples are). *u: the answer. */
+static void vp_bs_at(const vp_bspoly *b, double x, double *uio, double d[4])
+{
+    const double *c = b->c, s1 = c[0] + c[1] + c[2] + c[3];
+    double lo = 0, hi = 1, u = *uio >= 0 ? *uio : s1 > c[0] ? fmin(1, fmax(0, (x - c[0]) / (s1 - c[0]))) : 0.5;
     for (int it = 0; it < 60; it++) {
-        vp_bs_eval(P, u, dt, d);
-        const double f = d[0] - x;
+        const double f = c[0] + u * (c[1] + u * (c[2] + u * c[3])) - x;
         if (fabs(f) <= 1e-15 * (1 + fabs(x)) || hi - lo < 1e-15)
-            return;
+            break;
         if (f < 0)
             lo = u;
         else
             hi = u;
-        const double du = d[1] * dt, nu = du > 0 ? u - f / du : -1;
+        const double du = c[1] + u * (2 * c[2] + 3 * u * c[3]), nu = du > 0 ? u - f / du : -1;
         u = nu > lo && nu < hi ? nu : 0.5 * (lo + hi);
     }
+    *uio = u;
+    vp_bs_poly_eval(b, u, d);
 }
 
 /* The largest |q_i'| / V_i, |q_i''| / A_i, |q_i'''| / J_i over the constrained axes (into r[0..2], raised) of the
@@ -869,9 +891,11 @@ static void vp_cstep_ratio(const gpath *gp, const sim_vpop_limits *lim, size_t b
     for (int i = 0; i < SIM_VPOP_AXES; i++) {
         if (!(lim->axis_mask & (1u << i)))
             continue;
-        r[0] = fmax(r[0], fabs(t[i] * v) / lim->v[i]);
-        r[1] = fmax(r[1], fabs(c2[i] * v * v + t[i] * a) / lim->a[i]);
-        r[2] = fmax(r[2], fabs(c3[i] * v * v * v + 3 * c2[i] * v * a + t[i] * j) / lim->j[i]);
+        const double rv = fabs(t[i] * v) / lim->v[i], ra = fabs(c2[i] * v * v + t[i] * a) / lim->a[i];
+        const double rj = fabs(c3[i] * v * v * v + 3 * c2[i] * v * a + t[i] * j) / lim->j[i];
+        r[0] = rv > r[0] ? rv : r[0];
+        r[1] = ra > r[1] ? ra : r[1];
+        r[2] = rj > r[2] ? rj : r[2];
     }
 }
 
@@ -883,38 +907,110 @@ static size_t vp_block_from(const gpath *gp, size_t b, double s)
     return b;
 }
 
-/* Whether the segment with control points P holds the limits (checked as above; stops at the first point that
- * does not). */
+/* gp->cbound: per block, max |C''| and a bound of |C'''| (lines 0, 0; a clothoid with k = k0 + c u: max |k| at its
+ * ends and |c| + k², since C''' = c N - k² T; an arc: |C''| and |C''| / R). Returns 0 without memory. */
+static int vp_cstep_bounds(gpath *gp)
+{
+    gp->cbound = malloc(2 * gp->n * sizeof *gp->cbound);
+    if (!gp->cbound)
+        return 0;
+    for (size_t k = 0; k < gp->n; k++) {
+        const lsm_geom *g = &gp->g[k];
+        double k2 = 0, k3 = 0;
+        if (g->kind == LSM_GEOM_CLOTHOID) {
+            const double c = (double)g->u.clo.c_per_mm2, k0 = (double)g->u.clo.kappa0_per_mm;
+            k2 = fmax(fabs(k0), fabs(k0 + c * (double)g->len));
+            k3 = fabs(c) + k2 * k2;
+        } else if (g->kind == LSM_GEOM_ARC) {
+            lsm_real tr[3], cr[3];
+            lsm_geom_eval(g, 0, NULL, tr, cr);
+            k2 = sqrt((double)(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]));
+            k3 = k2 / (double)g->u.arc.radius_mm;
+        }
+        gp->cbound[2 * k] = k2 * (1 + 1e-12);
+        gp->cbound[2 * k + 1] = k3 * (1 + 1e-12);
+    }
+    return 1;
+}
+
+/* A sufficient condition (no evaluation of the geometry): with |s'| <= the largest of the segment's three discrete
+ * velocities, |s''| <= the larger of its two discrete accelerations (the B-spline's s' and s'' are convex
+ * combinations of them), s''' its discrete jerk, |C'_i| <= 1 (|dir_i| on lines) and the largest |C''|, |C'''| of the
+ * blocks over [P0, P3], eq 3 is bounded by |C'''| v³ + 3 |C''| v a + |C'_i| j per axis (and likewise v, a). */
+static int vp_cstep_easy(const gpath *gp, const sim_vpop_limits *lim, double dt, const double P[4], size_t b0)
+{
+    const double vm = fmax(fabs(P[1] - P[0]), fmax(fabs(P[2] - P[1]), fabs(P[3] - P[2]))) / dt;
+    const double am = fmax(fabs(P[0] - 2 * P[1] + P[2]), fabs(P[1] - 2 * P[2] + P[3])) / (dt * dt);
+    const double jm = fabs(P[3] - 3 * P[2] + 3 * P[1] - P[0]) / (dt * dt * dt);
+    double k2 = 0, k3 = 0, t[SIM_VPOP_AXES] = {0};
+    for (size_t k = b0; k < gp->n && (k == b0 || gp->s0[k] <= P[3]); k++) {
+        k2 = fmax(k2, gp->cbound[2 * k]);
+        k3 = fmax(k3, gp->cbound[2 * k + 1]);
+        for (int i = 0; i < SIM_VPOP_AXES; i++)
+            t[i] = fmax(t[i], gp->g[k].kind == LSM_GEOM_LINE ? fabs((double)gp->g[k].u.line.dir[i]) : i < 3 ? 1 : 0);
+    }
+    for (int i = 0; i < SIM_VPOP_AXES; i++) {
+        if (!(lim->axis_mask & (1u << i)))
+            continue;
+        if (t[i] * vm > lim->v[i] || k2 * vm * vm + t[i] * am > lim->a[i] ||
+            k3 * vm * vm * vm + 3 * k2 * vm * am + t[i] * jm > lim->j[i])
+            return 0;
+    }
+    return 1;
+}
+
+/* The bound of vp_cstep_easy on one line block with direction dir: |dir_i| times the segment's largest discrete
+ * velocity, acceleration and jerk of s (P) within the limits. */
+static int vp_cstep_line_easy(const lsm_geom *g, const sim_vpop_limits *lim, double dt, const double P[4])
+{
+    const double vm = fmax(fabs(P[1] - P[0]), fmax(fabs(P[2] - P[1]), fabs(P[3] - P[2]))) / dt;
+    const double am = fmax(fabs(P[0] - 2 * P[1] + P[2]), fabs(P[1] - 2 * P[2] + P[3])) / (dt * dt);
+    const double jm = fabs(P[3] - 3 * P[2] + 3 * P[1] - P[0]) / (dt * dt * dt);
+    for (int i = 0; i < SIM_VPOP_AXES; i++) {
+        const double t = fabs((double)g->u.line.dir[i]);
+        if ((lim->axis_mask & (1u << i)) && (t * vm > lim->v[i] || t * am > lim->a[i] || t * jm > lim->j[i]))
+            return 0;
+    }
+    return 1;
+}
+
+/* Whether the segment with control points P holds the limits (checked as above, block by block over the path range
+ * [s(0), s(1)] it covers: a line block whose bound (vp_cstep_line_easy) holds needs no point; any other block gets
+ * its share of VP_CSTEP_POINTS by length, at least VP_CSTEP_BLOCK_POINTS inside it, and both ends of its part;
+ * stops at the first point that fails). */
 static int vp_cstep_segment(const gpath *gp, const sim_vpop_limits *lim, double dt, const double P[4])
 {
     const size_t b0 = vp_block_at(gp, P[0]);
     if (gp->g[b0].kind == LSM_GEOM_LINE && vp_block_from(gp, b0, P[3]) == b0)
         return 1; /* implied by the discrete bounds (above) */
-    double r[3] = {0, 0, 0}, d[4];
-    size_t b = b0;
-    for (int m = 0; m <= VP_CSTEP_POINTS; m++) {
-        vp_bs_eval(P, (double)m / VP_CSTEP_POINTS, dt, d);
-        b = vp_block_from(gp, b, d[0]);
-        vp_cstep_ratio(gp, lim, b, d[0] - gp->s0[b], d, r);
-        if (r[0] > 1 || r[1] > 1 || r[2] > 1)
-            return 0;
-    }
-    double e0[4], e1[4];
-    vp_bs_eval(P, 0, dt, e0);
-    vp_bs_eval(P, 1, dt, e1);
-    for (size_t k = vp_block_from(gp, b0, e0[0]); k < gp->n && gp->s0[k] < e1[0]; k++) {
-        const double ka = fmax(gp->s0[k], e0[0]), kb = fmin(gp->s0[k] + (double)gp->g[k].len, e1[0]);
-        for (int m = 0; gp->g[k].kind != LSM_GEOM_LINE && m < VP_CSTEP_BLOCK_POINTS; m++) {
-            vp_bs_at(P, dt, ka + (kb - ka) * (m + 0.5) / VP_CSTEP_BLOCK_POINTS, d);
-            vp_cstep_ratio(gp, lim, k, d[0] - gp->s0[k], d, r);
+    if (gp->cbound && vp_cstep_easy(gp, lim, dt, P, b0))
+        return 1;
+    double r[3] = {0, 0, 0}, d[4], e0[4], e1[4];
+    const vp_bspoly bp = vp_bs_poly(P, dt);
+    vp_bs_poly_eval(&bp, 0, e0);
+    vp_bs_poly_eval(&bp, 1, e1);
+    const double span = e1[0] - e0[0];
+    for (size_t k = vp_block_from(gp, b0, e0[0]); k < gp->n && (gp->s0[k] < e1[0] || span <= 0); k++) {
+        const lsm_geom *g = &gp->g[k];
+        if (g->kind == LSM_GEOM_LINE && vp_cstep_line_easy(g, lim, dt, P)) {
+            if (span <= 0)
+                break;
+            continue;
         }
-        if (gp->s0[k] > e0[0] && k > 0) {
-            vp_bs_at(P, dt, gp->s0[k], d); /* the junction, on both sides */
-            vp_cstep_ratio(gp, lim, k - 1, (double)gp->g[k - 1].len, d, r);
-            vp_cstep_ratio(gp, lim, k, 0, d, r);
+        const double ka = fmax(gp->s0[k], e0[0]), kb = fmin(gp->s0[k] + (double)g->len, e1[0]);
+        const int np = span > 0 ? (int)fmax(VP_CSTEP_BLOCK_POINTS, ceil(VP_CSTEP_POINTS * (kb - ka) / span)) : 0;
+        double u = -1;
+        for (int m = 0; m <= np + 1; m++) { /* the part's ends and np points inside it */
+            const double x = m == 0 ? ka : m > np ? kb : ka + (kb - ka) * (m - 0.5) / np;
+            vp_bs_at(&bp, x, &u, d);
+            vp_cstep_ratio(gp, lim, k, x - gp->s0[k], d, r);
+            if (r[0] > 1 || r[1] > 1 || r[2] > 1)
+                return 0;
+            if (span <= 0)
+                break;
         }
-        if (r[0] > 1 || r[1] > 1 || r[2] > 1)
-            return 0;
+        if (span <= 0)
+            break;
     }
     return 1;
 }
@@ -1383,8 +1479,10 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
     }
     vp_gpath_table(&gp);
     sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL, NULL};
-    if (o->planner == SIM_RUN_VPOP_CSTEP)
+    if (o->planner == SIM_RUN_VPOP_CSTEP) {
         path.step_cont = gpath_step_cont;
+        (void)vp_cstep_bounds(&gp); /* (without memory: every segment is sampled) */
+    }
     sim_vpop_limits lim;
     memset(&lim, 0, sizeof lim);
     for (int i = 0; i < o->machine->n_axes; i++) {
@@ -1429,6 +1527,7 @@ done:
     free(gp.tab_off);
     free(gp.tab_m);
     free(gp.jsc);
+    free(gp.cbound);
     return rc;
 }
 

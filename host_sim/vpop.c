@@ -323,6 +323,7 @@ static int cont_ok(const vctx *c, const hist *h, double s)
     if (!c->p->step_cont)
         return 1;
     const double s4[4] = {h->s[2], h->s[1], h->s[0], s};
+    c->st->cont_checks++;
     return c->p->step_cont(c->p->ctx, c->lim, c->dt, s4);
 }
 
@@ -698,8 +699,9 @@ int sim_vpop_plan(const sim_vpop_path *p, const sim_vpop_limits *lim, double dt,
         n--;
     st->steps = (size_t)n;
     if (getenv("VPOP_DEBUG"))
-        fprintf(stderr, "vpop: %zu steps, %zu evals, %zu backtracks, %zu brake tests, %zu fallbacks\n", st->steps,
-                st->evals, st->backtracks, st->tests, st->fallbacks);
+        fprintf(stderr,
+                "vpop: %zu steps, %zu evals, %zu backtracks, %zu brake tests, %zu fallbacks, %zu continuous checks\n",
+                st->steps, st->evals, st->backtracks, st->tests, st->fallbacks, st->cont_checks);
     *s_out = S;
     *n_out = (size_t)n;
     return 0;

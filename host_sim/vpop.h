@@ -83,11 +83,12 @@ typedef struct sim_vpop_limits {
 #define SIM_VPOP_REFINE 8
 
 typedef struct sim_vpop_stats {
-    size_t steps;      /* setpoints */
-    size_t evals;      /* path evaluations */
-    size_t backtracks; /* dichotomies run */
-    size_t tests;      /* braking sequences simulated by the dichotomies */
-    size_t fallbacks;  /* steps where the linearised search gave no answer and the window scan ran */
+    size_t steps;       /* setpoints */
+    size_t evals;       /* path evaluations */
+    size_t backtracks;  /* dichotomies run */
+    size_t tests;       /* braking sequences simulated by the dichotomies */
+    size_t fallbacks;   /* steps where the linearised search gave no answer and the window scan ran */
+    size_t cont_checks; /* continuous checks of candidate steps (path->step_cont) */
     /* the first empty set, numbered as the paper does (s_j, j = 1 the first step after s_0 = 0 at rest): the
      * step j, the steps the dichotomy then tested (in order) and the step where s_min was taken; 0: none */
     long first_fail, first_brake;

@@ -52,7 +52,7 @@ typedef struct bp_row {
     double vpop_ns_cycle, vpop_s;
     double ns_piece;         /* lissom: background piece planning (lsm_interp_prepare) per piece */
     double isj_max, isj_p99; /* vpop: continuous axis jerk its motion asks between samples / J (pathrun.h) */
-    double dur_c;            /* vpop-cstep (pathrun.h), the continuous-limit reference: duration (-1 n/a) */
+    double dur_c;            /* vpop-cont (pathrun.h), the continuous-limit reference: duration (-1 n/a) */
     double cr_c[3];          /* its largest axis v/a/j over the limits on its continuous motion (vp_cont_verify) */
     double cj_vpop;          /* plain VPOp's continuous jerk / J by the same measure (-1 n/a) */
     double cs_s;             /* the reference's planning time on the host (s) */
@@ -104,7 +104,7 @@ static int bp_program(const char *root, const bp_case *c, bp_row *row)
         o.machine = &m;
         o.text = text;
         o.len = len;
-        o.planner = k == 2 ? SIM_RUN_VPOP_CSTEP : k ? SIM_RUN_VPOP : SIM_RUN_LISSOM;
+        o.planner = k == 2 ? SIM_RUN_VPOP_CONT : k ? SIM_RUN_VPOP : SIM_RUN_LISSOM;
         sim_run_result r;
         const double t0 = bp_now();
         if (sim_run_program(&o, &r) != 0) {
@@ -323,7 +323,7 @@ int cmd_bench_planner(int argc, char **argv)
                 json_num(stdout, r->cj_vpop);
             }
             if (r->dur_c > 0) {
-                printf(", \"vpop_cstep\": {\"duration\": ");
+                printf(", \"vpop_cont\": {\"duration\": ");
                 json_num(stdout, r->dur_c);
                 printf(", \"continuous_ratio\": {\"v\": ");
                 json_num(stdout, r->cr_c[0]);
@@ -339,7 +339,7 @@ int cmd_bench_planner(int argc, char **argv)
                 printf(", \"ratio\": ");
                 json_num(stdout, r->dur[0] / r->dur[1]);
                 if (r->dur_c > 0) {
-                    printf(", \"ratio_cstep\": ");
+                    printf(", \"ratio_cont\": ");
                     json_num(stdout, r->dur[0] / r->dur_c);
                 }
             }
@@ -349,7 +349,7 @@ int cmd_bench_planner(int argc, char **argv)
         return 0;
     }
     printf("%-16s %9s %9s %6s %9s %6s  %-17s  %-17s  %-20s  %8s  %11s  %9s %9s %10s %9s %9s\n", "case", "lissom s",
-           "vpop s", "ratio", "vpop-cs s", "ratio", "lissom v/a/j", "vpop v/a/j", "vpop-cs cont v/a/j", "vpop cj",
+           "vpop s", "ratio", "vpop-c s", "ratio", "lissom v/a/j", "vpop v/a/j", "vpop-c cont v/a/j", "vpop cj",
            "vpop isj", "ns/block", "ns/cycle", "ns/piece", "vpop s", "cs s");
     for (int i = 0; i < nr; i++) {
         const bp_row *r = &rows[i];
@@ -378,9 +378,9 @@ int cmd_bench_planner(int argc, char **argv)
     printf(
         "\nvpop isj: the continuous axis jerk VPOp's motion asks between its samples, over the limit (largest / 99th "
         "percentile; it holds the limit at the samples only); lissom holds it everywhere.\n"
-        "vpop-cs: the continuous-limit reference (run --planner vpop-cstep): VPOp whose every step also holds v, a and "
+        "vpop-c: the continuous-limit reference (run --planner vpop-cont): VPOp whose every step also holds v, a and "
         "j continuously between its samples (Beudaert eq 3 on the exact path derivatives, the motion between samples "
-        "being their cubic B-spline); ratio = lissom / vpop-cs. `vpop-cs cont v/a/j`: the largest axis v/a/j over the "
+        "being their cubic B-spline); ratio = lissom / vpop-c. `vpop-c cont v/a/j`: the largest axis v/a/j over the "
         "limits on that continuous motion, measured independently (resampled 32 times a cycle, finite differences of "
         "the exact positions); `vpop cj`: plain VPOp's continuous jerk / J by the same measure. `cs s`: the "
         "reference's planning time on the host.\n");

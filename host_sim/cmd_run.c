@@ -135,13 +135,6 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         json_num(f, r->cont_ratio[2]);
         fprintf(f, "},\n");
     }
-    if (o->planner == SIM_RUN_VPOP_CONT) {
-        fprintf(f, "  \"continuous_jerk_ratio\": ");
-        json_num(f, r->cont_jerk_max);
-        fprintf(f, ",\n  \"vpop_jerk_scale\": ");
-        json_num(f, r->vpop_jerk_scale);
-        fprintf(f, ",\n");
-    }
     fprintf(f,
             "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "
             "\"pieces\": %u, \"replans\": %u, \"fallbacks\": %u, \"plan_errors\": %u, \"ramp_checks\": %u, "
@@ -276,10 +269,8 @@ int cmd_run(int argc, char **argv)
         o.planner = SIM_RUN_VPOP;
     else if (strcmp(planner, "vpop-cont") == 0)
         o.planner = SIM_RUN_VPOP_CONT;
-    else if (strcmp(planner, "vpop-cstep") == 0)
-        o.planner = SIM_RUN_VPOP_CSTEP;
     else {
-        fprintf(stderr, "error: --planner must be lissom, vpop, vpop-cont or vpop-cstep\n");
+        fprintf(stderr, "error: --planner must be lissom, vpop or vpop-cont\n");
         return 2;
     }
     if (!(ovr > 0 && ovr <= 2)) {

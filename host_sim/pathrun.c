@@ -500,18 +500,8 @@ typedef struct gpath {
     size_t hint;   /* the block of the last evaluation */
     double *stops; /* where the planner stops (LSM_PB_STOP), ascending: VPOp comes to rest there too */
     size_t n_stops;
-    double *jsc; /* vpop-cont: the jerk scale per bin of jsc_bin_mm along the path (vp_cont_motion) */
-    size_t n_jsc;
-    double jsc_bin_mm;
     double *cbound; /* vpop-cstep: per block, the largest |C''| and a bound of |C'''| on it (vp_cstep_bounds) */
 } gpath;
-
-static double gpath_jscale(void *ctx, double s)
-{
-    const gpath *gp = ctx;
-    const double b = floor(s / gp->jsc_bin_mm);
-    return gp->jsc[b < 0 ? 0 : b >= (double)gp->n_jsc ? gp->n_jsc - 1 : (size_t)b];
-}
 
 static double gpath_next_stop(void *ctx, double s)
 {
@@ -702,61 +692,7 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
 }
 
 /*
- * The continuous axis jerk of VPOp's motion over the limit, largest over the samples and the points halfway between
- * them. The motion between samples is the cubic through the four samples around the point (at rest before the first
- * and after the last sample): at a sample, s', s'', s''' are the central differences of vpop_intersample; halfway
- * between samples k and k+1, with S_-1 .. S_2 the samples k-1 .. k+2,
- *     s = (-S_-1 + 9 S_0 + 9 S_1 - S_2) / 16,   s' = (S_-1 - 27 S_0 + 27 S_1 - S_2) / (24 dt),
- *     s'' = (S_-1 - S_0 - S_1 + S_2) / (2 dt²),  s''' = (S_2 - 3 S_1 + 3 S_0 - S_-1) / dt³.
- */
-/* The bin of gp's jerk scale that holds path point s. */
-static size_t vp_cont_bin(const gpath *gp, double s)
-{
-    const double fb = floor(s / gp->jsc_bin_mm);
-    return fb < 0 ? 0 : fb >= (double)gp->n_jsc ? gp->n_jsc - 1 : (size_t)fb;
-}
-
-/* The largest continuous jerk over the limit (vpop_cont_max); with binmax != NULL, also the largest in each bin of
- * gp's jerk scale (binmax[gp->n_jsc], set here). */
-static double vpop_cont_scan(const gpath *gp, double *binmax, const sim_vpop_limits *lim, const double *S, size_t n,
-                             double dt)
-{
-    if (binmax)
-        for (size_t i = 0; i < gp->n_jsc; i++)
-            binmax[i] = 0;
-    if (n == 0)
-        return 0;
-    double worst = 0;
-    for (long k = -2; k <= (long)n + 1; k++) {
-        double w[5]; /* S_k-2 .. S_k+2, at rest outside the samples */
-        for (int d = 0; d < 5; d++) {
-            const long i = k - 2 + d;
-            w[d] = S[i < 0 ? 0 : i >= (long)n ? (long)n - 1 : i];
-        }
-        const double sm2 = w[0], sm1 = w[1], s0 = w[2], s1 = w[3], s2 = w[4];
-        const double v = (s1 - sm1) / (2 * dt), a = (s1 - 2 * s0 + sm1) / (dt * dt);
-        const double j = (s2 - 2 * s1 + 2 * sm1 - sm2) / (2 * dt * dt * dt);
-        const double r0 = vp_jerk_ratio(gp, lim, s0, v, a, j);
-        const double sh = (-sm1 + 9 * s0 + 9 * s1 - s2) / 16, vh = (sm1 - 27 * s0 + 27 * s1 - s2) / (24 * dt);
-        const double ah = (sm1 - s0 - s1 + s2) / (2 * dt * dt), jh = (s2 - 3 * s1 + 3 * s0 - sm1) / (dt * dt * dt);
-        const double rh = vp_jerk_ratio(gp, lim, sh, vh, ah, jh);
-        worst = fmax(worst, fmax(r0, rh));
-        if (binmax) {
-            const size_t b0 = vp_cont_bin(gp, s0), bh = vp_cont_bin(gp, sh);
-            binmax[b0] = fmax(binmax[b0], r0);
-            binmax[bh] = fmax(binmax[bh], rh);
-        }
-    }
-    return worst;
-}
-
-static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const double *S, size_t n, double dt)
-{
-    return vpop_cont_scan(gp, NULL, lim, S, n, dt);
-}
-
-/*
- * The continuous-limit reference (pathrun.h: SIM_RUN_VPOP_CSTEP): VPOp whose every step is also checked between its
+ * The continuous-limit reference (pathrun.h: SIM_RUN_VPOP_CONT): VPOp whose every step is also checked between its
  * samples (vpop.h: step_cont).
  *
  * Interpolation model. The motion between the samples is s(t) = the uniform cubic B-spline whose control points are
@@ -770,15 +706,19 @@ static double vpop_cont_max(const gpath *gp, const sim_vpop_limits *lim, const d
  * the motion takes the same n cycles as the samples. Each axis then moves as (Beudaert eq 3)
  *     q' = C' s',  q'' = C'' s'² + C' s'',  q''' = C''' s'³ + 3 C'' s' s'' + C' s'''
  * with C' the exact tangent and C'' the exact curvature vector of the block at s (lsm_geom_eval), C''' in closed form
- * (vp_cstep_c3). The step passes if |q'| <= V, |q''| <= A, |q'''| <= J for every axis at VP_CSTEP_POINTS + 1
- * equally spaced u, at VP_CSTEP_BLOCK_POINTS points inside every curved block it overlaps, and on both sides of
- * every block junction inside the segment (the
- * curvature may jump there: the acceleration then jumps, and the jerk is held on each block up to its end). Inside
- * one line block the check is implied by the discrete bounds VPOp already holds on the same four samples (the
- * B-spline's v, a, j are convex combinations of the discrete ones there), so it is skipped.
+ * (vp_cstep_c3). The step passes if |q'| <= V, |q''| <= A, |q'''| <= J for every axis, checked block by block
+ * over the part of the path the segment covers: on each block's part at its share (by length) of VP_CSTEP_POINTS
+ * points, at least VP_CSTEP_BLOCK_POINTS, and at both ends of the part (so on both sides of every junction: the
+ * curvature may jump there, the acceleration then steps, and the jerk is held on each block up to its end). No
+ * point is needed where a bound holds already: inside one line block the check is implied by the discrete bounds
+ * VPOp holds on the same four samples (the B-spline's s', s'' are convex combinations of the discrete v and a, s'''
+ * is the discrete jerk); otherwise vp_cstep_easy (the whole segment) and vp_cstep_line_easy (a line part) bound eq 3
+ * from those discrete values and the blocks' largest |C''| and |C'''|. Between the points a peak can exceed the
+ * limit by O(1 / VP_CSTEP_POINTS²) of its curvature: measured by vp_cont_verify, at most 5.1e-5 of the limit on the
+ * shipped paths.
  */
-#define VP_CSTEP_POINTS 16      /* points per cycle where a step's motion is checked (plus the junctions inside it) */
-#define VP_CSTEP_BLOCK_POINTS 4 /* and this many inside every curved block it overlaps (short corner blocks) */
+#define VP_CSTEP_POINTS 16      /* points per cycle where a step's motion is checked, shared among the blocks ... */
+#define VP_CSTEP_BLOCK_POINTS 4 /* ... and at least this many in every block that needs them (short corner blocks) */
 
 /* s, s', s'', s''' at u in [0, 1] of the B-spline segment with control points P (one cycle dt). */
 static void vp_bs_eval(const double P[4], double u, double dt, double d[4])
@@ -1250,178 +1190,6 @@ static void vp_best_motion(const sim_run_opts *o, const sim_vpop_path *path, sim
     }
 }
 
-/* VPOp held to its jerk limits continuously (pathrun.h: SIM_RUN_VPOP_CONT), i.e. its continuous axis jerk
- * (vpop_cont_scan, Beudaert eq 3, against the unscaled limits) <= J at its samples and halfway between them. Only
- * the jerk limit is scaled: v and a hold on the samples and are not what leaves the limits between them.
- *   Stage 1, global: one factor sigma on every axis's jerk limit, the largest (bisection) for which the motion holds.
- *   Stage 2, local: from that motion, the jerk scale (vpop.h, jscale: one per bin of the path) is raised in the
- *   bins whose neighbourhood has slack (continuous jerk under VP_CONT_SLACK of the limit), and VPOp runs again;
- *   bins whose raise made a point exceed the limit go back to their last value that held and stay there. The
- *   fastest motion that holds is kept, so stage 2 can only shorten stage 1's. */
-#define VP_CONT_ITERS 12        /* stage 1: at most this many VPOp runs */
-#define VP_CONT_SIGMA_MIN 0.05  /* below this the motion is not a useful reference: give up (no motion) */
-#define VP_CONT_REL 0.01        /* sigma to 1 % of its bracket */
-#define VP_CONT_TOL 1e-9        /* relative: rounding of the differences */
-#define VP_CONT_LOCAL_ITERS 24  /* stage 2: at most this many VPOp runs */
-#define VP_CONT_BIN_MIN_MM 0.05 /* bins: at least this long ... */
-#define VP_CONT_BINS_MAX 65536  /* ... and at most this many (long paths) */
-#define VP_CONT_SLACK 0.98      /* a bin is raised while its neighbourhood stays under this share of the limit, */
-#define VP_CONT_RAISE_MIN 1.01  /* ... down to this (a raise that broke it far from the raised bins halves the step) */
-#define VP_CONT_RAISE_MAX 1.15  /* by at most this factor a run (toward VP_CONT_SLACK / its largest ratio) */
-#define VP_CONT_NEAR 3          /* neighbourhood: bins either side (the steps whose jerk shapes a point's motion) */
-
-/* Stage 1. *scale: sigma (unchanged when nothing holds). */
-static void vp_cont_global(const sim_run_opts *o, const sim_vpop_path *path, const gpath *gp, sim_vpop_limits *lim,
-                           double cycle_s, double **S, size_t *n, double *scale)
-{
-    const sim_vpop_limits base = *lim;
-    double lo = 0, hi = 1, sigma = 1;
-    for (int it = 0; it < VP_CONT_ITERS; it++) {
-        for (int i = 0; i < SIM_VPOP_AXES; i++)
-            lim->j[i] = base.j[i] * sigma;
-        double *S2 = NULL;
-        size_t n2 = 0;
-        vp_best_motion(o, path, lim, cycle_s, &S2, &n2);
-        const int ok = S2 && vpop_cont_max(gp, &base, S2, n2, cycle_s) <= 1 + VP_CONT_TOL;
-        if (ok) {
-            free(*S);
-            *S = S2;
-            *n = n2;
-            lo = sigma;
-            *scale = sigma;
-        } else {
-            free(S2);
-            hi = sigma;
-        }
-        if (lo == hi || (lo > 0 && hi - lo < VP_CONT_REL * hi))
-            break;
-        if (lo == 0) { /* nothing holds yet: halve */
-            if (sigma < VP_CONT_SIGMA_MIN)
-                break;
-            sigma *= 0.5;
-        } else {
-            sigma = 0.5 * (lo + hi);
-        }
-    }
-    *lim = base;
-}
-
-/* The largest of binmax over bin b's neighbourhood. */
-static double vp_cont_near(const gpath *gp, const double *binmax, size_t b)
-{
-    double m = 0;
-    const size_t lo = b > VP_CONT_NEAR ? b - VP_CONT_NEAR : 0;
-    for (size_t i = lo; i <= b + VP_CONT_NEAR && i < gp->n_jsc; i++)
-        m = fmax(m, binmax[i]);
-    return m;
-}
-
-/* Stage 2, one proposal: raises the bins with slack in binmax (the motion that holds, on gp->jsc == good). Returns
- * the count raised. */
-static size_t vp_cont_raise(gpath *gp, const double *binmax, const unsigned char *frozen, double raise_max)
-{
-    size_t raised = 0;
-    for (size_t b = 0; b < gp->n_jsc; b++) {
-        const double m = vp_cont_near(gp, binmax, b);
-        if (frozen[b] || gp->jsc[b] >= 1 || m >= VP_CONT_SLACK)
-            continue;
-        gp->jsc[b] = fmin(1, gp->jsc[b] * (m > 0 ? fmin(raise_max, VP_CONT_SLACK / m) : raise_max));
-        raised++;
-    }
-    return raised;
-}
-
-/* Stage 2, after a proposal that broke the limit: the bins near a point over it go back to good and freeze. */
-static size_t vp_cont_revert(gpath *gp, const double *binmax, const double *good, unsigned char *frozen)
-{
-    size_t n = 0;
-    for (size_t b = 0; b < gp->n_jsc; b++)
-        if (vp_cont_near(gp, binmax, b) > 1 + VP_CONT_TOL && gp->jsc[b] != good[b]) {
-            gp->jsc[b] = good[b];
-            frozen[b] = 1;
-            n++;
-        }
-    return n;
-}
-
-/* Stage 2 (gp->jsc: the scales of the motion *S, which holds). */
-static void vp_cont_local(const sim_run_opts *o, const sim_vpop_path *path, gpath *gp, sim_vpop_limits *lim,
-                          double cycle_s, double **S, size_t *n)
-{
-    double *binmax = malloc(gp->n_jsc * sizeof *binmax), *good = malloc(gp->n_jsc * sizeof *good);
-    unsigned char *frozen = calloc(gp->n_jsc, 1);
-    if (binmax && good && frozen) {
-        memcpy(good, gp->jsc, gp->n_jsc * sizeof *good);
-        (void)vpop_cont_scan(gp, binmax, lim, *S, *n, cycle_s);
-        int propose = 1; /* 0: the last proposal broke the limit; it runs again without the bins reverted */
-        double raise_max = VP_CONT_RAISE_MAX;
-        for (int it = 0; it < VP_CONT_LOCAL_ITERS; it++) {
-            if (propose && vp_cont_raise(gp, binmax, frozen, raise_max) == 0)
-                break;
-            double *S2 = NULL;
-            size_t n2 = 0;
-            vp_best_motion(o, path, lim, cycle_s, &S2, &n2);
-            if (!S2)
-                break;
-            const double wr = vpop_cont_scan(gp, binmax, lim, S2, n2, cycle_s);
-            if (wr > 1 + VP_CONT_TOL) {
-                free(S2);
-                propose = 0;
-                if (vp_cont_revert(gp, binmax, good, frozen) ==
-                    0) { /* not near a raised bin: all back, smaller raises */
-                    memcpy(gp->jsc, good, gp->n_jsc * sizeof *good);
-                    (void)vpop_cont_scan(gp, binmax, lim, *S, *n, cycle_s);
-                    raise_max = sqrt(raise_max);
-                    propose = 1;
-                    if (raise_max < VP_CONT_RAISE_MIN)
-                        break;
-                }
-                continue;
-            }
-            propose = 1;
-            memcpy(good, gp->jsc, gp->n_jsc * sizeof *good);
-            if (n2 < *n) {
-                free(*S);
-                *S = S2;
-                *n = n2;
-            } else {
-                free(S2);
-            }
-        }
-        memcpy(gp->jsc, good, gp->n_jsc * sizeof *good);
-    }
-    free(binmax);
-    free(good);
-    free(frozen);
-}
-
-/* r->vpop_jerk_scale: the smallest factor on the jerk limit anywhere on the path. */
-static void vp_cont_motion(const sim_run_opts *o, const sim_vpop_path *path0, gpath *gp, sim_vpop_limits *lim,
-                           double cycle_s, double **S, size_t *n, sim_run_result *r)
-{
-    *S = NULL;
-    *n = 0;
-    double sigma = 1;
-    vp_cont_global(o, path0, gp, lim, cycle_s, S, n, &sigma);
-    if (!*S)
-        return;
-    r->vpop_jerk_scale = sigma;
-    gp->jsc_bin_mm = fmax(VP_CONT_BIN_MIN_MM, gp->len / VP_CONT_BINS_MAX);
-    gp->n_jsc = (size_t)(gp->len / gp->jsc_bin_mm) + 1;
-    gp->jsc = malloc(gp->n_jsc * sizeof *gp->jsc);
-    if (!gp->jsc)
-        return;
-    for (size_t i = 0; i < gp->n_jsc; i++)
-        gp->jsc[i] = sigma;
-    sim_vpop_path path = *path0;
-    path.jscale = gpath_jscale;
-    vp_cont_local(o, &path, gp, lim, cycle_s, S, n);
-    double smallest = 1;
-    for (size_t i = 0; i < gp->n_jsc; i++)
-        smallest = fmin(smallest, gp->jsc[i]);
-    r->vpop_jerk_scale = smallest;
-}
-
 /* The samples as setpoints (the last one exactly the programmed end), with feed and block sequence number. */
 static int vp_record(gpath *gp, const lsm_planner *pl, const double *S, size_t n, double cycle_s, rec *out,
                      sim_run_result *r)
@@ -1478,8 +1246,8 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
         goto done;
     }
     vp_gpath_table(&gp);
-    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL, NULL};
-    if (o->planner == SIM_RUN_VPOP_CSTEP) {
+    sim_vpop_path path = {gp.len, gpath_eval, gpath_feed, &gp, gpath_eval_d, gpath_next_stop, NULL};
+    if (o->planner == SIM_RUN_VPOP_CONT) {
         path.step_cont = gpath_step_cont;
         (void)vp_cstep_bounds(&gp); /* (without memory: every segment is sampled) */
     }
@@ -1494,10 +1262,7 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
     }
     size_t n = 0;
     const double t0 = now_ns();
-    if (o->planner == SIM_RUN_VPOP_CONT)
-        vp_cont_motion(o, &path, &gp, &lim, cfg.cycle_s, &S, &n, r);
-    else
-        vp_best_motion(o, &path, &lim, cfg.cycle_s, &S, &n);
+    vp_best_motion(o, &path, &lim, cfg.cycle_s, &S, &n);
     if (!S) {
         snprintf(r->err, sizeof r->err, "vpop: no motion found");
         goto done;
@@ -1506,10 +1271,7 @@ static int run_vpop(const sim_run_opts *o, const sim_prog *p, rec *out, sim_run_
     if (vp_record(&gp, pl, S, n, cfg.cycle_s, out, r) != 0)
         goto done;
     vpop_intersample(&gp, &lim, S, n, cfg.cycle_s, r);
-    r->cont_jerk_max = vpop_cont_max(&gp, &lim, S, n, cfg.cycle_s);
     vp_cont_verify(&gp, &lim, S, n, cfg.cycle_s, r->cont_ratio);
-    if (o->planner != SIM_RUN_VPOP_CONT)
-        r->vpop_jerk_scale = 1;
     r->cycles = n;
     r->duration_s = (double)n * cfg.cycle_s;
     r->stats = pl->stats;
@@ -1526,7 +1288,6 @@ done:
     free(gp.stops);
     free(gp.tab_off);
     free(gp.tab_m);
-    free(gp.jsc);
     free(gp.cbound);
     return rc;
 }
@@ -1536,7 +1297,6 @@ int sim_run_program(const sim_run_opts *o, sim_run_result *r)
     memset(r, 0, sizeof *r);
     r->pl_block_bytes = (uint32_t)sizeof(lsm_pblock);
     r->intersample_jerk_max = r->intersample_jerk_p99 = -1;
-    r->cont_jerk_max = r->vpop_jerk_scale = -1;
     r->cont_ratio[0] = r->cont_ratio[1] = r->cont_ratio[2] = -1;
     const sim_machine *m = o->machine;
     r->cycle_s = m->cycle_s;

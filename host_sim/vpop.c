@@ -82,7 +82,7 @@ static int step_bounds(const vctx *c, const hist *h, stepb *b)
 {
     const sim_vpop_limits *L = c->lim;
     const double dt = c->dt;
-    const double jdt3 = (c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0) * dt * dt * dt;
+    const double jdt3 = dt * dt * dt;
     int ok = 1;
     for (int i = 0; i < SIM_VPOP_AXES; i++) {
         const double q0 = h->q[0][i], q1 = h->q[1][i], q2 = h->q[2][i];
@@ -536,17 +536,16 @@ static int brake_choice(const vctx *c, const hist *h, double beta, int cont, dou
     /* the smallest s whose (v', a') can still stop cleanly: v' >= a'² / (2 J) when a' < 0, with J the tangential
      * jerk a straight line in the local direction allows, min_i J_i / |dq_i/ds| */
     double J = HUGE_VAL;
-    const double js = c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0;
     if (beta < -1.5) {
-        J = js * c->jt;
+        J = c->jt;
     } else {
         double q[SIM_VPOP_AXES], d[SIM_VPOP_AXES];
         eval_d(c, h->s[0], q, d);
         for (int i = 0; i < SIM_VPOP_AXES; i++)
             if ((c->lim->axis_mask & (1u << i)) && fabs(d[i]) > 1e-9)
-                J = fmin(J, js * c->lim->j[i] / fabs(d[i]));
+                J = fmin(J, c->lim->j[i] / fabs(d[i]));
         if (!(J < HUGE_VAL))
-            J = js * c->jt;
+            J = c->jt;
     }
     double lo = smin, hi = smax;
     const double s = lo;
@@ -898,7 +897,7 @@ void sim_bspline_eval_s(void *ctx, double s, double q[SIM_VPOP_AXES])
 
 sim_vpop_path sim_bspline_path(sim_bspline *b)
 {
-    sim_vpop_path p = {b->length, sim_bspline_eval_s, sim_bspline_feed, b, sim_bspline_eval_sd, NULL, NULL, NULL};
+    sim_vpop_path p = {b->length, sim_bspline_eval_s, sim_bspline_feed, b, sim_bspline_eval_sd, NULL, NULL};
     return p;
 }
 

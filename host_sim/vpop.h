@@ -57,12 +57,8 @@ typedef struct sim_vpop_path {
     /* optional: the first point >= s where the motion must be at rest (a corner the geometry does not smooth),
      * or length. The planner does not pass such a point before it is at rest on it. NULL: none but L. */
     double (*next_stop)(void *ctx, double s);
-    /* optional: a factor in (0, 1] on every axis's jerk limit for the step that starts at s (a reference held to
-     * its limits between its samples lowers its jerk where its motion exceeds them there: pathrun.c, vpop-cont).
-     * NULL: 1 everywhere. */
-    double (*jscale)(void *ctx, double s);
     /* optional: the continuous check of a step (a reference held to its limits between its samples: pathrun.c,
-     * vpop-cstep). s4 = {s_j-2, s_j-1, s_j, s}: the history and the candidate s_j+1; returns 1 if the motion between
+     * vpop-cont). s4 = {s_j-2, s_j-1, s_j, s}: the history and the candidate s_j+1; returns 1 if the motion between
      * the samples that this step defines holds the limits lim continuously. Every candidate (the forward step, the
      * braking sequences, the switching step) must pass it as well as the discrete bounds: where an end of the
      * discrete set fails, the searches move inwards to the last point that passes (a grid of CONT_GRID points, then

@@ -1,5 +1,5 @@
 /*
- * test_sim_vpop_cstep.c: the continuous-limit reference (`--planner vpop-cstep`, pathrun.h SIM_RUN_VPOP_CSTEP): VPOp
+ * test_sim_vpop_cont.c: the continuous-limit reference (`--planner vpop-cont`, pathrun.h SIM_RUN_VPOP_CONT): VPOp
  * whose every step is also checked between its samples (vpop.h: step_cont; pathrun.c: vp_cstep_segment), the motion
  * between the samples being their cubic B-spline (the step's discrete jerk held over the cycle).
  *
@@ -97,8 +97,8 @@ static void test_shipped_paths(void **state)
         assert_non_null(text);
         sim_run_result plain, cs;
         run_checked(&m, text, len, SIM_RUN_VPOP, &plain);
-        run_checked(&m, text, len, SIM_RUN_VPOP_CSTEP, &cs);
-        printf("  %s: vpop %.3f s (continuous v/a/j %.3f/%.3f/%.3f), vpop-cstep %.3f s (%.3f/%.3f/%.6f)\n",
+        run_checked(&m, text, len, SIM_RUN_VPOP_CONT, &cs);
+        printf("  %s: vpop %.3f s (continuous v/a/j %.3f/%.3f/%.3f), vpop-cont %.3f s (%.3f/%.3f/%.6f)\n",
                k_cases[c].program, plain.duration_s, plain.cont_ratio[0], plain.cont_ratio[1], plain.cont_ratio[2],
                cs.duration_s, cs.cont_ratio[0], cs.cont_ratio[1], cs.cont_ratio[2]);
         assert_true(holds_continuously(&cs));
@@ -122,8 +122,8 @@ static void test_lines_same_as_vpop(void **state)
     static const char text[] = "G21 G90 G61\nG1 X40 Y10 F6000\nG1 X45 Y-20 Z3\nG1 X0 Y0 Z0 F3000\n";
     sim_run_result plain, cs;
     run_checked(&m, text, strlen(text), SIM_RUN_VPOP, &plain);
-    run_checked(&m, text, strlen(text), SIM_RUN_VPOP_CSTEP, &cs);
-    printf("  lines: vpop %.3f s, vpop-cstep %.3f s (continuous j %.6f)\n", plain.duration_s, cs.duration_s,
+    run_checked(&m, text, strlen(text), SIM_RUN_VPOP_CONT, &cs);
+    printf("  lines: vpop %.3f s, vpop-cont %.3f s (continuous j %.6f)\n", plain.duration_s, cs.duration_s,
            cs.cont_ratio[2]);
     assert_int_equal(plain.n, cs.n);
     assert_memory_equal(plain.q, cs.q, plain.n * LSM_MAX_AXES * sizeof *plain.q);

@@ -719,6 +719,7 @@ static void vpop_intersample(const gpath *gp, const sim_vpop_limits *lim, const 
  */
 #define VP_CSTEP_POINTS 16      /* points per cycle where a step's motion is checked, shared among the blocks ... */
 #define VP_CSTEP_BLOCK_POINTS 4 /* ... and at least this many in every block that needs them (short corner blocks) */
+#define VP_CSTEP_REFINE 4       /* golden-section steps (2 points each) around each part's largest point */
 
 /* s, s', s'', s''' at u in [0, 1] of the B-spline segment with control points P (one cycle dt). */
 static void vp_bs_eval(const double P[4], double u, double dt, double d[4])
@@ -899,6 +900,16 @@ static int vp_cstep_easy(const gpath *gp, const sim_vpop_limits *lim, double dt,
     return 1;
 }
 
+/* The largest of the three ratios (vp_cstep_ratio) at path point x of block k on the segment b (*u: vp_bs_at). */
+static double vp_cstep_point(const gpath *gp, const sim_vpop_limits *lim, const vp_bspoly *b, size_t k, double x,
+                             double *u)
+{
+    double d[4], r[3] = {0, 0, 0};
+    vp_bs_at(b, x, u, d);
+    vp_cstep_ratio(gp, lim, k, x - gp->s0[k], d, r);
+    return fmax(r[0], fmax(r[1], r[2]));
+}
+
 /* The bound of vp_cstep_easy on one line block with direction dir: |dir_i| times the segment's largest discrete
  * velocity, acceleration and jerk of s (P) within the limits. */
 static int vp_cstep_line_easy(const lsm_geom *g, const sim_vpop_limits *lim, double dt, const double P[4])
@@ -939,19 +950,39 @@ static int vp_cstep_segment(const gpath *gp, const sim_vpop_limits *lim, double 
         }
         const double ka = fmax(gp->s0[k], e0[0]), kb = fmin(gp->s0[k] + (double)g->len, e1[0]);
         const int np = span > 0 ? (int)fmax(VP_CSTEP_BLOCK_POINTS, ceil(VP_CSTEP_POINTS * (kb - ka) / span)) : 0;
-        double u = -1;
+        double u = -1, xs[VP_CSTEP_POINTS + 2], worst = -1;
+        int mw = 0;
         for (int m = 0; m <= np + 1; m++) { /* the part's ends and np points inside it */
             const double x = m == 0 ? ka : m > np ? kb : ka + (kb - ka) * (m - 0.5) / np;
-            vp_bs_at(&bp, x, &u, d);
-            vp_cstep_ratio(gp, lim, k, x - gp->s0[k], d, r);
-            if (r[0] > 1 || r[1] > 1 || r[2] > 1)
+            const double w = vp_cstep_point(gp, lim, &bp, k, x, &u);
+            if (w > 1)
                 return 0;
+            xs[m] = x;
+            if (w > worst) {
+                worst = w;
+                mw = m;
+            }
             if (span <= 0)
                 break;
         }
         if (span <= 0)
             break;
+        /* the largest point's neighbourhood, by golden section: the peak between the points */
+        double a = xs[mw > 0 ? mw - 1 : 0], b = xs[mw <= np ? mw + 1 : np + 1];
+        for (int it = 0; it < VP_CSTEP_REFINE && b > a; it++) {
+            const double x1 = b - 0.618033988749895 * (b - a), x2 = a + 0.618033988749895 * (b - a);
+            double u1 = -1, u2 = -1;
+            const double w1 = vp_cstep_point(gp, lim, &bp, k, x1, &u1), w2 = vp_cstep_point(gp, lim, &bp, k, x2, &u2);
+            if (w1 > 1 || w2 > 1)
+                return 0;
+            if (w1 > w2)
+                b = x2;
+            else
+                a = x1;
+        }
     }
+    (void)r;
+    (void)d;
     return 1;
 }
 

@@ -937,7 +937,7 @@ static int vp_cstep_segment(const gpath *gp, const sim_vpop_limits *lim, double 
         return 1; /* implied by the discrete bounds (above) */
     if (gp->cbound && vp_cstep_easy(gp, lim, dt, P, b0))
         return 1;
-    double r[3] = {0, 0, 0}, d[4], e0[4], e1[4];
+    double e0[4], e1[4];
     const vp_bspoly bp = vp_bs_poly(P, dt);
     vp_bs_poly_eval(&bp, 0, e0);
     vp_bs_poly_eval(&bp, 1, e1);
@@ -982,8 +982,6 @@ static int vp_cstep_segment(const gpath *gp, const sim_vpop_limits *lim, double 
                 a = x1;
         }
     }
-    (void)r;
-    (void)d;
     return 1;
 }
 

@@ -510,11 +510,12 @@ static int cont_sel(const vctx *c, const hist *h, double smin, double *sel)
     return 1;
 }
 
-/* One step of the braking sequence beta from history h (the choice brake_seq makes). */
+/* The choice of the braking sequence beta after history h, on the discrete set (cont 0) or on the set whose ends pass
+ * the continuous check (cont 1, moved towards s_min until it passes). */
 static int brake_choice(const vctx *c, const hist *h, double beta, int cont, double *sel);
 
-/* With a continuous check, the choice is first made on the discrete set and kept if it passes; else it is made again
- * on the set whose ends pass (next_set) and moved towards s_min until it passes (cont_sel). */
+/* One step of the braking sequence beta from history h (the choice brake_seq makes). With a continuous check, the
+ * choice is first made on the discrete set and kept if it passes; else it is made again with cont (brake_choice). */
 static int brake_step(const vctx *c, const hist *h, double beta, double *sel)
 {
     if (c->p->step_cont && brake_choice(c, h, beta, 0, sel) && cont_ok(c, h, *sel))

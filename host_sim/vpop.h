@@ -30,6 +30,10 @@
  * feasible point there = empty. s_min likewise. With linear axes only, s is also bounded by the chord of the
  * step: s0 + |P| - |J| dt³ <= s <= s0 + 1.1 (|P| + |J| dt³), P = 2 q_j - 3 q_j-1 + q_j-2.
  *
+ * Continuous check (optional, path->step_cont: the continuous-limit reference, pathrun.c vpop-cont): every candidate
+ * step (forward, braking sequences, switching step) must also pass a check of the motion between the samples; an end
+ * of the discrete set that fails it moves inwards to the last point that passes (grid, then bisection).
+ *
  * Stops: path->next_stop gives points where the motion must come to rest (corners the geometry leaves sharp,
  * where the real-time planner stops too); the planner does not pass one before it is at rest on it.
  * The motion ends at rest on s = L.

@@ -18,6 +18,7 @@
  * by more than this slack: half a cycle, plus a relative share of the times for their rounding. */
 #define STAIR_PRUNE_SLACK_CYCLES LSM_R(0.5)
 #define STAIR_PRUNE_SLACK_REL LSM_R(1e-4)
+#define STAIR_MOVED_MARGIN LSM_R(0.999)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* pieces                                                                                                       */
@@ -84,15 +85,20 @@ static bool place_B(pctx *pc, plan5 *p, bool exact)
 /* The whole piece for cruise feed vc: ramp A as early as it verifies, ramp B as late, the cruise between. Ramp A is
  * placed for itself; where a cap below vc follows it (a dip that the lead cruise at v0 could pass, e.g. the corner
  * a piece starts at), ramp A moves after that dip, once (else the whole piece ran at v0). */
-static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+static bool feas5_first_A(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool catchup, plan5 *p)
 {
     p->v0 = v0;
     p->vc = vc;
     p->v1 = v1;
     p->slack = R0;
-    if (!(vc > R0))
-        return false;
-    if (!place_A(pc, v0, vc, p, catchup, R0) || !place_B(pc, p, exact))
+    return vc > R0 && place_A(pc, v0, vc, p, catchup, R0);
+}
+
+/* The rest of feas5 once its first ramp A is placed (feas5_first_A). */
+static bool feas5_rest(pctx *pc, bool exact, bool catchup, plan5 *p)
+{
+    const lsm_real v0 = p->v0, vc = p->vc;
+    if (!place_B(pc, p, exact))
         return false;
     lsm_real xa_end = p->xA + p->A.dist;
     if (lsm_pl_region_ok(pc, xa_end, p->xB, vc))
@@ -108,6 +114,11 @@ static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, b
         return true;
     p->slack = R0;
     return false;
+}
+
+static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+{
+    return feas5_first_A(pc, v0, vc, v1, catchup, p) && feas5_rest(pc, exact, catchup, p);
 }
 
 static void put_ramp(lsm_piece *pc, int at, const ramp *r, lsm_real dt)
@@ -367,7 +378,18 @@ static void try_step(pctx *pc, const ramp_tops *tops, const plan5 *best, lsm_rea
     if (!stair_may_gain(t_best - x_cmp / vmax - loss1 - loss2, need, dt, t_best, x_cmp, vmax))
         return;
     plan5 p, q;
-    if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
+    /* the first step's ramp A alone first: the bound below with it (feas5 keeps it) or, where feas5 moves it after
+     * a dip, with the least that move can cost (stair_moved_may_gain); ramp B only when one of them may gain */
+    if (!feas5_first_A(pc, v0, vc, lsm_min2(best->v1, vc), false, &p))
+        return;
+    {
+        const lsm_real x1 = p.xA + p.A.dist, t1 = time_to(&p, dt, x1);
+        if (!(x1 < best->xB &&
+              stair_may_gain(t_best - t1 - (x_cmp - x1) / vmax - loss2, need, dt, t_best + t1, x_cmp, vmax)) &&
+            lsm_pl_region_ok(pc, x1, pc->D, vc))
+            return;
+    }
+    if (!feas5_rest(pc, exact, false, &p))
         return;
     const lsm_real x1 = p.xA + p.A.dist;
     if (!(x1 < best->xB))

@@ -9,15 +9,46 @@
  * classic Cephes minimax polynomials on [-pi/4, pi/4]; cbrt by an exponent-halving first guess and three
  * Newton steps; atan by the Cephes reduction to |t| <= tan(pi/8) and a degree-9 odd polynomial.
  * Accuracy (tests/base/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
- * The double build keeps the C library (lsm_math.h). The sin/cos kernels are inline in lsm_math.h, so that
- * lsm_math_sincosf (both at once, the same bits) inlines where it is called.
+ * The double build keeps the C library (lsm_math.h). lsm_math_sincosf (sin and cos at once, the same bits) is
+ * one function here, not inline in every caller: it was copied into each object that called it (flash).
  */
 #include "lsm_math.h"
 
 #include <string.h>
 
+/* Out of line here, one copy for the whole core (a static function in each object that used it before: flash). */
+void lsm_cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 #define PIO2_F 1.5707963267948966f
 #define PIO4_F 0.7853981633974483f
+
+/* The kernels of lsm_math_sinf and lsm_math_cosf: Cody-Waite reduction by pi/2 (pi/2 in three parts, the first
+ * two with trailing zero bits) and the Cephes polynomials on [-pi/4, pi/4]. */
+static float lsm_math_sin_polyf(float r)
+{
+    const float z = r * r;
+    return ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+}
+
+static float lsm_math_cos_polyf(float r)
+{
+    const float z = r * r;
+    return ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
+}
+
+/* x = k pi/2 + r with |r| <= pi/4 (about); returns r and the quadrant k mod 4. */
+static float lsm_math_reduce_pio2f(float x, unsigned *quadrant)
+{
+    const float kf = x * 0.636619772367581f;
+    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
+    *quadrant = (unsigned)(int32_t)k & 3u;
+    return ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
+}
 
 float lsm_math_sinf(float x)
 {
@@ -45,6 +76,28 @@ float lsm_math_cosf(float x)
     case 2: return -lsm_math_cos_polyf(r);
     default: return lsm_math_sin_polyf(r);
     }
+}
+
+void lsm_math_sincosf(float x, float *s_out, float *c_out)
+{
+    if (x != x || x > 3.0e38f || x < -3.0e38f) {
+        *s_out = *c_out = x - x; /* NaN for NaN and inf */
+        return;
+    }
+    unsigned q;
+    const float r = lsm_math_reduce_pio2f(x, &q);
+    const float sp = lsm_math_sin_polyf(r), cp = lsm_math_cos_polyf(r);
+    float sv = sp, cv = cp; /* quadrant 0 */
+    if (q & 1u) {           /* 1: (cp, -sp); 3: (-cp, sp) */
+        sv = cp;
+        cv = -sp;
+    }
+    if (q & 2u) { /* 2: (-sp, -cp) */
+        sv = -sv;
+        cv = -cv;
+    }
+    *s_out = sv;
+    *c_out = cv;
 }
 
 float lsm_math_cbrtf(float x)

@@ -63,52 +63,18 @@ static inline int lsm_check_finite(lsm_real x)
     return 0;
 }
 
-/* The kernels of lsm_math_sinf and lsm_math_cosf: Cody-Waite reduction by pi/2 (pi/2 in three parts, the first
- * two with trailing zero bits) and the Cephes polynomials on [-pi/4, pi/4]. Inline, so that lsm_math_sincosf
- * inlines where it is called (the clothoid stepper's anchors). */
-static inline float lsm_math_sin_polyf(float r)
+/* a . b of 3-vectors (inline: it sits in the arc fit's per-point loops). */
+static inline lsm_real lsm_dot3(const lsm_real a[3], const lsm_real b[3])
 {
-    const float z = r * r;
-    return ((-1.9515295891e-4f * z + 8.3321608736e-3f) * z - 1.6666654611e-1f) * z * r + r;
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-static inline float lsm_math_cos_polyf(float r)
-{
-    const float z = r * r;
-    return ((2.443315711809948e-5f * z - 1.388731625493765e-3f) * z + 4.166664568298827e-2f) * z * z - 0.5f * z + 1.0f;
-}
+/* a x b of 3-vectors (lsm_math.c: one copy for the core instead of one per object). */
+void lsm_cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3]);
 
-/* x = k pi/2 + r with |r| <= pi/4 (about); returns r and the quadrant k mod 4. */
-static inline float lsm_math_reduce_pio2f(float x, unsigned *quadrant)
-{
-    const float kf = x * 0.636619772367581f;
-    const float k = kf >= 0 ? (float)(int32_t)(kf + 0.5f) : -(float)(int32_t)(0.5f - kf);
-    *quadrant = (unsigned)(int32_t)k & 3u;
-    return ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
-}
-
-/* sin and cos of x at once: the same bits as lsm_math_sinf and lsm_math_cosf, one reduction. */
-static inline void lsm_math_sincosf(float x, float *s_out, float *c_out)
-{
-    if (x != x || x > 3.0e38f || x < -3.0e38f) {
-        *s_out = *c_out = x - x; /* NaN for NaN and inf */
-        return;
-    }
-    unsigned q;
-    const float r = lsm_math_reduce_pio2f(x, &q);
-    const float sp = lsm_math_sin_polyf(r), cp = lsm_math_cos_polyf(r);
-    float sv = sp, cv = cp; /* quadrant 0 */
-    if (q & 1u) {           /* 1: (cp, -sp); 3: (-cp, sp) */
-        sv = cp;
-        cv = -sp;
-    }
-    if (q & 2u) { /* 2: (-sp, -cp) */
-        sv = -sv;
-        cv = -cv;
-    }
-    *s_out = sv;
-    *c_out = cv;
-}
+/* sin and cos of x at once: the same bits as lsm_math_sinf and lsm_math_cosf, one reduction (lsm_math.c: one
+ * copy in the image, not one per caller's object). */
+void lsm_math_sincosf(float x, float *s_out, float *c_out);
 
 /* sin and cos of x at once (float: one argument reduction for both). */
 static inline void lsm_sincos(lsm_real x, lsm_real *s, lsm_real *c)

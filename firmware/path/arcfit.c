@@ -31,18 +31,6 @@
 #endif
 #define AF_DRIFT_SHARE LSM_R(0.5) /* in a given plane, points at most tol / 2 off it: a line there still fits after */
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static void sub3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
 {
     o[0] = a[0] - b[0];
@@ -56,7 +44,7 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, const 
 {
     lsm_real d[3];
     sub3(end, p0, d);
-    const lsm_real L = lsm_sqrt(dot3(d, d));
+    const lsm_real L = lsm_sqrt(lsm_dot3(d, d));
     if (!(L > R0))
         return false;
     const lsm_real u[3] = {d[0] / L, d[1] / L, d[2] / L};
@@ -64,12 +52,12 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, const 
     for (int i = 0; i < n; i++) {
         lsm_real r[3];
         sub3(q[i].p, p0, r);
-        const lsm_real t = dot3(r, u);
+        const lsm_real t = lsm_dot3(r, u);
         if (t < tprev) /* the points must follow each other along the line */
             return false;
         tprev = t;
         const lsm_real x[3] = {r[0] - t * u[0], r[1] - t * u[1], r[2] - t * u[2]};
-        e = lsm_max2(e, lsm_sqrt(dot3(x, x)));
+        e = lsm_max2(e, lsm_sqrt(lsm_dot3(x, x)));
     }
     if (tprev > L * (R1 + AF_ORDER_SLACK))
         return false;
@@ -93,7 +81,7 @@ typedef enum { AF_PLANE_OK, AF_PLANE_NONE, AF_PLANE_ON_CHORD } af_plane_kind;
 /* Unit vector of v; false if it has no length. */
 static bool unit3(const lsm_real v[3], lsm_real o[3])
 {
-    const lsm_real l = lsm_sqrt(dot3(v, v));
+    const lsm_real l = lsm_sqrt(lsm_dot3(v, v));
     if (!(l > R0))
         return false;
     for (int i = 0; i < 3; i++)
@@ -109,16 +97,16 @@ static void af_frame(const lsm_real n[3], lsm_real eu[3], lsm_real ev[3])
                                                                                        : 2;
     const lsm_real ek[3] = {k == 0 ? R1 : R0, k == 1 ? R1 : R0, k == 2 ? R1 : R0};
     lsm_real a[3];
-    cross3(n, ek, a);
+    lsm_cross3(n, ek, a);
     if (!unit3(a, eu))
         eu[0] = R1, eu[1] = eu[2] = R0;
-    cross3(n, eu, ev);
+    lsm_cross3(n, eu, ev);
 }
 
 /* The chord direction u (unit; on entry the chord's) projected into the plane with unit normal nh. */
 static bool af_into_plane(const lsm_real nh[3], lsm_real u[3])
 {
-    const lsm_real un = dot3(u, nh);
+    const lsm_real un = lsm_dot3(u, nh);
     lsm_real w[3];
     for (int i = 0; i < 3; i++)
         w[i] = u[i] - un * nh[i];
@@ -137,12 +125,12 @@ static af_plane_kind af_plane_free(const lsm_real p0[3], const lsm_arcfit_pt *q,
     for (int i = 0; i < n - 1; i++) {
         lsm_real r[3];
         sub3(q[i].p, p0, r);
-        const lsm_real t = dot3(r, u);
+        const lsm_real t = lsm_dot3(r, u);
         for (int j = 0; j < 3; j++)
             w[j] += r[j] - t * u[j];
     }
-    cross3(u, w, nh);
-    const lsm_real nl = lsm_sqrt(dot3(nh, nh));
+    lsm_cross3(u, w, nh);
+    const lsm_real nl = lsm_sqrt(lsm_dot3(nh, nh));
     if (!(nl > LSM_REAL_EPS * L * L)) /* all on the chord */
         return AF_PLANE_ON_CHORD;
     for (int i = 0; i < 3; i++)
@@ -169,7 +157,7 @@ static af_plane_kind af_plane(const lsm_real p0[3], const lsm_arcfit_pt *q, int 
         return AF_PLANE_NONE;
     if (kf != AF_PLANE_OK)
         return kf;
-    const lsm_real nd = dot3(nh, d);
+    const lsm_real nd = lsm_dot3(nh, d);
     if (lsm_fabs(nd) <= AF_CONTAINS_TOL)
         return AF_PLANE_OK; /* the chord's own plane holds the line (a planar program) */
     /* turned the least to hold it (a chord of the same curve, rounded, is off its plane by about rounding / chord) */
@@ -190,7 +178,7 @@ static bool af_curvature(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, ls
     for (int i = 0; i < n - 1; i++) {
         lsm_real r[3];
         sub3(q[i].p, p0, r);
-        const lsm_real t = dot3(r, u), y = dot3(r, v);
+        const lsm_real t = lsm_dot3(r, u), y = lsm_dot3(r, v);
         const lsm_real gg = t * (L - t) / LSM_R(2.0);
         sgy += y * gg;
         sgg += gg * gg;
@@ -214,7 +202,7 @@ static bool af_check_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, ls
     for (int i = 0; i < n; i++) {
         lsm_real rel[3];
         sub3(q[i].p, C, rel);
-        const lsm_real x1 = dot3(rel, e1), y1 = dot3(rel, e2), h = dot3(rel, nh);
+        const lsm_real x1 = lsm_dot3(rel, e1), y1 = lsm_dot3(rel, e2), h = lsm_dot3(rel, nh);
         lsm_real th = lsm_atan2(sg * y1, x1);
         if (th < -AF_ANGLE_SLACK_RAD)
             th += LSM_R(2.0) * PI_R;
@@ -239,7 +227,7 @@ static bool af_check_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, ls
         const lsm_real axial = lsm_max2(lsm_fabs(h), lsm_fabs(hp));
         lsm_real c[3];
         sub3(q[i].p, xprev, c);
-        const lsm_real sagitta = lsm_max2(e, eprev) + dot3(c, c) / (LSM_R(8.0) * r);
+        const lsm_real sagitta = lsm_max2(e, eprev) + lsm_dot3(c, c) / (LSM_R(8.0) * r);
         const lsm_real seg = lsm_max2(sagitta, lsm_sqrt(radial * radial + axial * axial));
         err = lsm_max2(err, lsm_max2(e, seg));
         if (err > tol)
@@ -268,12 +256,12 @@ static bool af_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real
         C[i] = p0[i] + LSM_R(0.5) * L * u[i] + yc * v[i];
     for (int i = 0; i < 3; i++)
         e1[i] = p0[i] - C[i];
-    const lsm_real e1l = lsm_sqrt(dot3(e1, e1));
+    const lsm_real e1l = lsm_sqrt(lsm_dot3(e1, e1));
     if (!(e1l > R0))
         return false;
     for (int i = 0; i < 3; i++)
         e1[i] /= e1l; /* exactly unit: the plane normal is passed on from arc to arc */
-    cross3(nh, e1, e2);
+    lsm_cross3(nh, e1, e2);
     const lsm_real r = R;
     const lsm_real sg = k > R0 ? -R1 : R1; /* bulging to +v: clockwise about nh */
     lsm_real err, th_end;
@@ -312,7 +300,7 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
             return false;
         lsm_real r[3];
         sub3(qe, p0, r);
-        const lsm_real z = dot3(r, pn);
+        const lsm_real z = lsm_dot3(r, pn);
         for (int i = 0; i < 3; i++)
             le[i] = qe[i] - z * pn[i];
     }
@@ -336,7 +324,7 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
     /* chord p0 -> qe (both kept exactly), its direction u, the plane nh, v across the chord in the plane */
     lsm_real b[3], u[3], nh[3], v[3];
     sub3(qe, p0, b);
-    const lsm_real L0 = lsm_sqrt(dot3(b, b));
+    const lsm_real L0 = lsm_sqrt(lsm_dot3(b, b));
     if (!(L0 > R0))
         return false;
     for (int i = 0; i < 3; i++)
@@ -352,7 +340,7 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
     const lsm_real hmax = !in_plane ? tol : pc->drift_mm > R0 ? lsm_min2(pc->drift_mm, tol) : AF_DRIFT_SHARE * tol;
     const lsm_real L = L0; /* (the projected chord is shorter by about offset² / L: the check below measures the
                             * points against the circle actually built) */
-    cross3(nh, u, v);      /* (u, v, nh) right-handed; v points across the chord, in the plane */
+    lsm_cross3(nh, u, v);  /* (u, v, nh) right-handed; v points across the chord, in the plane */
     lsm_real k;
     if (!af_curvature(p0, q, n, L, u, v, &k))
         return false;
@@ -388,7 +376,7 @@ void lsm_arcfit_chain_add(lsm_arcfit_chain *c, const lsm_real nrm[3], const lsm_
     for (int i = 0; i < n; i++) {
         lsm_real r[3];
         sub3(q[i].p, c->origin, r);
-        const lsm_real u = dot3(r, eu), v = dot3(r, ev), z = dot3(r, nrm);
+        const lsm_real u = lsm_dot3(r, eu), v = lsm_dot3(r, ev), z = lsm_dot3(r, nrm);
         const lsm_real add[9] = {u * u, u * v, v * v, u, v, R1, z * u, z * v, z};
         for (int k = 0; k < 9; k++)
             c->s[k] += add[k];
@@ -399,8 +387,8 @@ void lsm_arcfit_chain_add(lsm_arcfit_chain *c, const lsm_real nrm[3], const lsm_
 static lsm_real det3(const lsm_real a[3], const lsm_real b[3], const lsm_real c[3])
 {
     lsm_real x[3];
-    cross3(b, c, x);
-    return dot3(a, x);
+    lsm_cross3(b, c, x);
+    return lsm_dot3(a, x);
 }
 
 bool lsm_arcfit_chain_plane(const lsm_arcfit_chain *c, const lsm_real nrm[3], lsm_real out[3])

@@ -23,18 +23,6 @@
 #define CN_GOLDEN 4  /* golden-section steps of a smooth bracket before the parabolic ones */
 #define CN_ACCEPT ((lsm_real)LSM_CORNER_ACCEPT)
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* One block near the corner, in the corner frame: curvature k, available length, and what the
  * distance function needs for an arc (centre, radius, the angular range as mid direction and
  * cosine of the half width). */
@@ -78,7 +66,8 @@ static void cn_circ(lsm_real k, lsm_real s, lsm_real *x, lsm_real *y, lsm_real *
         return;
     }
     const lsm_real h = LSM_R(0.5) * k * s;
-    const lsm_real sh = lsm_sin(h), ch = lsm_cos(h);
+    lsm_real sh, ch;
+    lsm_sincos(h, &sh, &ch);
     const lsm_real sinc = h == LSM_R(0.0) ? LSM_R(1.0) : sh / h;
     *x = s * sinc * ch;
     *y = s * sinc * sh;
@@ -724,26 +713,26 @@ static lsm_status cn_check_input(const lsm_geom *b1, const lsm_geom *b2, const l
 static lsm_status cn_corner_normal(cn_corner *cc)
 {
     lsm_real w[3];
-    cross3(cc->t1, cc->t2, w);
-    const lsm_real sw = lsm_sqrt(dot3(w, w));
+    lsm_cross3(cc->t1, cc->t2, w);
+    const lsm_real sw = lsm_sqrt(lsm_dot3(w, w));
     if (cc->arc1 || cc->arc2) {
         lsm_geom_normal(cc->arc1 ? cc->bb[0] : cc->bb[1], cc->n);
         if (cc->arc1 && cc->arc2) {
             lsm_real n2[3], x[3];
             lsm_geom_normal(cc->bb[1], n2);
-            cross3(cc->n, n2, x);
-            if (lsm_sqrt(dot3(x, x)) > CN_PLANAR_TOL)
+            lsm_cross3(cc->n, n2, x);
+            if (lsm_sqrt(lsm_dot3(x, x)) > CN_PLANAR_TOL)
                 return LSM_E_NONPLANAR;
         } else {
             const lsm_real *tl = cc->arc1 ? cc->t2 : cc->t1;
-            if (lsm_fabs(dot3(tl, cc->n)) > CN_PLANAR_TOL)
+            if (lsm_fabs(lsm_dot3(tl, cc->n)) > CN_PLANAR_TOL)
                 return LSM_E_NONPLANAR;
         }
-        if (lsm_fabs(dot3(cc->g, cc->n)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+        if (lsm_fabs(lsm_dot3(cc->g, cc->n)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
             return LSM_E_GAP;
     } else {
         if (!(sw > LSM_R(0.0)))
-            return dot3(cc->t1, cc->t2) > LSM_R(0.0) ? LSM_E_COLLINEAR : LSM_E_REVERSAL;
+            return lsm_dot3(cc->t1, cc->t2) > LSM_R(0.0) ? LSM_E_COLLINEAR : LSM_E_REVERSAL;
         for (int i = 0; i < 3; i++)
             cc->n[i] = w[i] / sw;
     }
@@ -755,19 +744,20 @@ static lsm_status cn_corner_orient(cn_corner *cc)
 {
     for (int i = 0; i < 3; i++)
         cc->ex[i] = cc->t1[i];
-    cross3(cc->n, cc->ex, cc->ey);
+    lsm_cross3(cc->n, cc->ex, cc->ey);
     for (int i = 0; i < 2; i++) {
         cc->k[i] = LSM_R(0.0);
         if (cc->bb[i]->kind == LSM_GEOM_ARC) {
             lsm_real na[3];
             lsm_geom_normal(cc->bb[i], na);
-            const lsm_real sgn =
-                (cc->bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (dot3(na, cc->n) > LSM_R(0.0)) ? LSM_R(1.0) : LSM_R(-1.0);
+            const lsm_real sgn = (cc->bb[i]->u.arc.sweep_rad > LSM_R(0.0)) == (lsm_dot3(na, cc->n) > LSM_R(0.0))
+                                     ? LSM_R(1.0)
+                                     : LSM_R(-1.0);
             cc->k[i] = sgn / cc->bb[i]->u.arc.radius_mm;
         }
     }
-    cc->t2x = dot3(cc->t2, cc->ex);
-    cc->t2y = dot3(cc->t2, cc->ey);
+    cc->t2x = lsm_dot3(cc->t2, cc->ex);
+    cc->t2y = lsm_dot3(cc->t2, cc->ey);
     /* orientation: make the turn a left turn (delta >= 0). A tangent joint (|delta| within the angle
      * epsilon) is oriented so that k2 <= k1 instead: the Newton start then picks the pair whose
      * curvature stays within [min, max] of k1, k2 in size (no overshoot; for a line and an arc of
@@ -800,7 +790,7 @@ static lsm_status cn_corner_setup(const lsm_geom *b1, const lsm_geom *b2, cn_cor
     lsm_geom_eval(b2, LSM_R(0.0), cc->v2, cc->t2, NULL);
     for (int i = 0; i < 3; i++)
         cc->g[i] = cc->v2[i] - cc->v1[i];
-    if (lsm_sqrt(dot3(cc->g, cc->g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+    if (lsm_sqrt(lsm_dot3(cc->g, cc->g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
         return LSM_E_GAP;
     cc->arc1 = b1->kind == LSM_GEOM_ARC;
     cc->arc2 = b2->kind == LSM_GEOM_ARC;
@@ -858,7 +848,7 @@ static lsm_status cn_line_line(const cn_corner *cc, const lsm_real dmax[2], lsm_
     out->kappa_max_per_mm = delta / L;
     out->sharpness_max_per_mm2 = c;
     /* B ends on block 2 by symmetry (rounding only); what is left is the input's own gap */
-    out->gap_mm = lsm_sqrt(dot3(cc->g, cc->g));
+    out->gap_mm = lsm_sqrt(lsm_dot3(cc->g, cc->g));
     out->gap_rad = LSM_R(0.0);
     out->closed_form = 1;
     out->scales = 1;
@@ -1057,7 +1047,7 @@ static lsm_status cn_general(const cn_corner *cc, const lsm_real dmax[2], lsm_re
     }
     /* limited: the tolerance could not be used (trim limits, or no transition at larger scales) */
     out->limited = (s.best_vd > s.best_pd ? s.best_vd : s.best_pd) < CN_ACCEPT * target ? 1 : 0;
-    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], lsm_sqrt(dot3(cc->g, cc->g)), out);
+    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], lsm_sqrt(lsm_dot3(cc->g, cc->g)), out);
     if (st != LSM_OK)
         return st;
     out->vertex_dev_mm = s.best_vd;
@@ -1085,7 +1075,8 @@ lsm_status lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_c
     /* the symmetric line-line pair: X + iY = int_0^1 e^{i delta u^2/2} du */
     lsm_real X, Y;
     cn_unit_pair(cc.delta, &X, &Y);
-    const lsm_real hc = lsm_cos(LSM_R(0.5) * cc.delta), hs = lsm_sin(LSM_R(0.5) * cc.delta);
+    lsm_real hc, hs;
+    lsm_sincos(LSM_R(0.5) * cc.delta, &hs, &hc);
     const lsm_real ratio = X + Y * hs / hc; /* trim per unit half-length */
 
     out->delta_rad = cc.delta;

@@ -20,22 +20,10 @@ static lsm_status geom_check(const lsm_real *v, int n)
     return LSM_OK;
 }
 
-static lsm_real dot3(const lsm_real a[3], const lsm_real b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static bool geom_orthonormal(const lsm_real e1[3], const lsm_real e2[3])
 {
-    return lsm_fabs(dot3(e1, e1) - LSM_R(1.0)) <= GEOM_ORTHO_TOL &&
-           lsm_fabs(dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(dot3(e1, e2)) <= GEOM_ORTHO_TOL;
+    return lsm_fabs(lsm_dot3(e1, e1) - LSM_R(1.0)) <= GEOM_ORTHO_TOL &&
+           lsm_fabs(lsm_dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(lsm_dot3(e1, e2)) <= GEOM_ORTHO_TOL;
 }
 
 static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
@@ -118,7 +106,7 @@ static bool geom_shift_ok(lsm_real t, lsm_real chord, lsm_real r)
  * 16 eps r, as in double: at R 6e4 that is 0.1 mm, and a programmed chord of 0.1 mm would turn a full circle. */
 static bool geom_same_point(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3], const lsm_real e2[3])
 {
-    const lsm_real su = dot3(start, e1), sv = dot3(start, e2), eu = dot3(end, e1), ev = dot3(end, e2);
+    const lsm_real su = lsm_dot3(start, e1), sv = lsm_dot3(start, e2), eu = lsm_dot3(end, e1), ev = lsm_dot3(end, e2);
     const lsm_real sc = lsm_fabs(su) + lsm_fabs(sv) + lsm_fabs(eu) + lsm_fabs(ev);
     return lsm_fabs(eu - su) + lsm_fabs(ev - sv) <= LSM_R(4.0) * LSM_REAL_EPS * sc;
 }
@@ -136,7 +124,7 @@ static bool geom_arc_bisector(const lsm_real start[3], const lsm_real end[3], co
                               lsm_real *phi0, lsm_real *sweep)
 {
     const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
-    const lsm_real du = dot3(d, e1), dv = dot3(d, e2);
+    const lsm_real du = lsm_dot3(d, e1), dv = lsm_dot3(d, e2);
     const lsm_real c = lsm_sqrt(du * du + dv * dv);
     if (geom_same_point(start, end, e1, e2))
         return false;
@@ -173,13 +161,13 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     lsm_real e1[3], e2[3], n[3];
     if (!geom_plane_basis(plane, e1, e2) || (dir != 1 && dir != -1))
         return LSM_E_ARG;
-    cross3(e1, e2, n);
+    lsm_cross3(e1, e2, n);
     lsm_real ds[3], de[3];
     for (int i = 0; i < 3; i++) {
         ds[i] = start[i] - centre[i];
         de[i] = end[i] - centre[i];
     }
-    lsm_real u1 = dot3(ds, e1), v1 = dot3(ds, e2), u2 = dot3(de, e1), v2 = dot3(de, e2);
+    lsm_real u1 = lsm_dot3(ds, e1), v1 = lsm_dot3(ds, e2), u2 = lsm_dot3(de, e1), v2 = lsm_dot3(de, e2);
     lsm_real r1 = lsm_sqrt(u1 * u1 + v1 * v1), r2 = lsm_sqrt(u2 * u2 + v2 * v2);
     if (!(r1 > LSM_R(0.0)) || !(r2 > LSM_R(0.0)) || lsm_check_finite(r1) || lsm_check_finite(r2))
         return LSM_E_ARC_GEOMETRY;
@@ -229,7 +217,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->plane = (uint8_t)plane;
     g->rotary_only = 0;
     g->reserved = 0;
-    const lsm_real ns = dot3(ds, n); /* start's offset from the centre along n */
+    const lsm_real ns = lsm_dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
         g->u.arc.start_mm[i] = start[i];
         (void)cshift;
@@ -241,7 +229,7 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->u.arc.phi0_rad = phi0;
     g->u.arc.sweep_rad = dir > 0 ? sweep : -sweep;
     lsm_real dse[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
-    g->u.arc.axial_mm = dot3(dse, n);
+    g->u.arc.axial_mm = lsm_dot3(dse, n);
     geom_arc_len(g);
     if (lsm_check_finite(g->len))
         return LSM_E_RANGE;
@@ -327,7 +315,7 @@ lsm_status lsm_geom_clothoid_init(lsm_geom *g, const lsm_real origin[3], const l
 
 static void geom_arc_normal(const lsm_geom_arc *a, lsm_real n[3])
 {
-    cross3(a->e1, a->e2, n);
+    lsm_cross3(a->e1, a->e2, n);
 }
 
 /* The in-plane chord from the start to the angle phi0 + dphi: 2 r sin(dphi/2) (-sin(phi0 + dphi/2) e1 +
@@ -408,7 +396,8 @@ lsm_status lsm_geom_eval(const lsm_geom *g, lsm_real s, lsm_real pos[LSM_MAX_AXE
             lsm_clothoid_integral(c->theta0_rad, c->kappa0_per_mm, c->c_per_mm2, s, &X, &Y);
         const lsm_real th = c->theta0_rad + s * (c->kappa0_per_mm + LSM_R(0.5) * c->c_per_mm2 * s);
         const lsm_real k = c->kappa0_per_mm + c->c_per_mm2 * s;
-        const lsm_real co = lsm_cos(th), si = lsm_sin(th);
+        lsm_real co, si;
+        lsm_sincos(th, &si, &co);
         for (int i = 0; i < 3; i++) {
             if (pos)
                 pos[i] = c->origin_mm[i] + c->e1[i] * X + c->e2[i] * Y;
@@ -428,7 +417,7 @@ lsm_real lsm_geom_kappa(const lsm_geom *g, lsm_real s)
     lsm_real cv[3];
     if (lsm_geom_eval(g, s, NULL, NULL, cv) != LSM_OK)
         return LSM_R(0.0);
-    return lsm_sqrt(dot3(cv, cv));
+    return lsm_sqrt(lsm_dot3(cv, cv));
 }
 
 lsm_real lsm_geom_length(const lsm_geom *g)
@@ -453,7 +442,7 @@ bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
         return true;
     }
     if (g->kind == LSM_GEOM_CLOTHOID) {
-        cross3(g->u.clo.e1, g->u.clo.e2, n);
+        lsm_cross3(g->u.clo.e1, g->u.clo.e2, n);
         return true;
     }
     return false;

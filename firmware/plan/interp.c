@@ -80,8 +80,8 @@ static void block_end(const lsm_interp *ip, uint32_t id, lsm_real e[3])
 static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
 {
     const lsm_geom_arc *a = &g->u.arc;
-    const lsm_real n[3] = {a->e1[1] * a->e2[2] - a->e1[2] * a->e2[1], a->e1[2] * a->e2[0] - a->e1[0] * a->e2[2],
-                           a->e1[0] * a->e2[1] - a->e1[1] * a->e2[0]};
+    lsm_real n[3];
+    lsm_cross3(a->e1, a->e2, n);
     lsm_real c[3];
     if (ip->anchor == 0u || g->len != ip->a_len) {
         lsm_real pe[LSM_MAX_AXES], e[3];

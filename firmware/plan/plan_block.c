@@ -34,8 +34,11 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     const lsm_real k = lsm_ceil((t0 - psi) / PI_R);
     if (psi + k * PI_R <= t1)
         return R;
-    const lsm_real f0 = lsm_fabs(A * lsm_cos(t0) + B * lsm_sin(t0));
-    const lsm_real f1 = lsm_fabs(A * lsm_cos(t1) + B * lsm_sin(t1));
+    lsm_real s0, c0, s1, c1; /* (one argument reduction for both) */
+    lsm_sincos(t0, &s0, &c0);
+    lsm_sincos(t1, &s1, &c1);
+    const lsm_real f0 = lsm_fabs(A * c0 + B * s0);
+    const lsm_real f1 = lsm_fabs(A * c1 + B * s1);
     const lsm_real m = lsm_max2(f0, f1);
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
@@ -66,9 +69,7 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         t1 = lsm_max2(p0, p1);
         sT = a->radius_mm * lsm_fabs(w);
         k = a->radius_mm * w * w; /* in-plane curvature of the helix */
-        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        lsm_cross3(e1, e2, n);
         ax = a->axial_mm / g->len;
         /* q_s = sT (-sin phi e1 + cos phi e2) sgn + n ax; q_ss = -k (cos phi e1 + sin phi e2);
          * q_sss = k |w| (sin phi e1 - cos phi e2) sgn */

@@ -103,7 +103,7 @@ static bool feas5_rest(pctx *pc, bool exact, bool catchup, plan5 *p)
     lsm_real xa_end = p->xA + p->A.dist;
     if (lsm_pl_region_ok(pc, xa_end, p->xB, vc))
         return true;
-    p->slack = R0; /* (a cap, not the room, failed it) */
+    p->slack = R0;  /* (a cap, not the room, failed it) */
     lsm_real x_dip; /* (from rest there is no lead cruise: a ramp from v0 = 0 starts where the piece starts) */
     if (catchup || !(v0 > R0) || !(vc > v0) || !lsm_pl_last_below(pc, xa_end, p->xB, vc, &x_dip))
         return false;

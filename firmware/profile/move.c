@@ -747,7 +747,8 @@ static void ramp2_starts(const lsm_move *mv, unsigned axis, unsigned from, lsm_k
     lsm_scurve_phases(&mv->dec, -ax->jp_dec_mm_s3, rev);
     lsm_kin r = {0, ax->v1_mm_s, 0, 0};
     const lsm_real D = lsm_fabs(ax->distance_mm);
-    for (unsigned q = 0; q + from <= 14; q++) { /* reversed phase q is forward phase 14 - q; its end is that one's start */
+    /* reversed phase q is forward phase 14 - q; its end is that one's start */
+    for (unsigned q = 0; q + from <= 14; q++) {
         lsm_phase_end(&rev[q], mv->cycle_s, &r, &r);
         lsm_kin *o = &out[14 - q];
         o->s_mm = D - r.s_mm;

@@ -103,7 +103,7 @@ static void test_refused_moves_now_plan(void **state)
  * those moves with an older revision's).
  */
 static unsigned long long g_seed = 1; /* argv[1] */
-static int g_cases = 3000;           /* argv[2] */
+static int g_cases = 3000;            /* argv[2] */
 
 /* In float, the distances of peaks next to a jump of the totals are within rounding of D: the reference is taken
  * for D shrunk and grown by this (relative) and the move's totals must lie between. Exact in double. */

@@ -107,6 +107,10 @@ lsm_status sim_drive_validate(const sim_drive_params *p, double cycle_s, const c
             return st;
         }
     }
+    if (p->servo_period_s < SIM_DRIVE_MIN_SERVO_PERIOD_S) {
+        *bad_field = "servo_period_s";
+        return LSM_E_ARG;
+    }
     if (p->vff_gain > 1.5) {
         *bad_field = "vff_gain";
         return LSM_E_ARG;

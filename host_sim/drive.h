@@ -46,6 +46,10 @@
 
 #include "status.h"
 
+/* The shortest servo period a drive may have: real drives close their loops at 4-32 kHz, and a shorter period only
+ * multiplies the substeps per cycle (cycle / period of them; a 1e-50 s period would overflow their count). */
+#define SIM_DRIVE_MIN_SERVO_PERIOD_S 1e-6
+
 typedef struct sim_drive_params {
     bool rotary; /* API positions in rad instead of mm (see above) */
     /* position loop, closed on the load position */

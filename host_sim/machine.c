@@ -219,11 +219,13 @@ static sim_machine_status load_axis(const ctx *c, int obj, int idx, double cycle
             if (f >= 0)
                 at = f;
         }
-        return fail(c, at, SIM_MACHINE_E_DRIVE, "%sdrive: \"%s\" is not valid (%s)%s", where, bad ? bad : "?",
-                    lsm_status_str(ds),
-                    bad && strcmp(bad, "servo_period_s") == 0
-                        ? ": it must not exceed the cycle, the current time constant, or 0.5/(2 pi f_res)"
-                        : "");
+        if (bad && strcmp(bad, "servo_period_s") == 0)
+            return fail(c, at, SIM_MACHINE_E_DRIVE,
+                        "%sdrive: \"servo_period_s\" %g s is not valid (%s): it must be at least %g s and must not "
+                        "exceed the cycle, the current time constant, or 0.5/(2 pi f_res)",
+                        where, a->drive.servo_period_s, lsm_status_str(ds), SIM_DRIVE_MIN_SERVO_PERIOD_S);
+        return fail(c, at, SIM_MACHINE_E_DRIVE, "%sdrive: \"%s\" is not valid (%s)", where, bad ? bad : "?",
+                    lsm_status_str(ds));
     }
     /* valid numbers can still make an unstable loop: a small step must settle */
     sim_drive_step_stats ss;

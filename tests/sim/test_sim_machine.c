@@ -336,7 +336,13 @@ static void test_bad_files(void **state)
     snprintf(big, sizeof big,
              "{" TOP ", \"axes\": [{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, \"j_max_mm_s3\": "
              "1e4, \"snap_max_mm_s4\": 1e6, \"counts_per_mm\": 100,\n \"drive\": {\"stiffness_N_m\": 1e11}}]}");
-    expect_bad(big, SIM_MACHINE_E_DRIVE, "t.json:2:", "\"servo_period_s\" is not valid");
+    expect_bad(big, SIM_MACHINE_E_DRIVE, "t.json:2:", "\"servo_period_s\" 6.25e-05 s is not valid");
+    /* a servo period far below any drive's (fuzz_machine: 1e-50 s overflowed the substep count, and 1e-9 s made the
+     * settling test run for minutes): refused up front, the value named */
+    snprintf(big, sizeof big,
+             "{" TOP ", \"axes\": [{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, \"j_max_mm_s3\": "
+             "1e4, \"snap_max_mm_s4\": 1e6, \"counts_per_mm\": 100, \"drive\": {\"servo_period_s\": 1e-50}}]}");
+    expect_bad(big, SIM_MACHINE_E_DRIVE, "\"servo_period_s\" 1e-50 s is not valid", "at least 1e-06 s");
     snprintf(big, sizeof big,
              "{" TOP ", \"axes\": [{\"name\": \"X\", \"v_max_mm_s\": 100, \"a_max_mm_s2\": 1000, \"j_max_mm_s3\": "
              "1e4, \"snap_max_mm_s4\": 1e6, \"counts_per_mm\": 100, \"drive\": {\"vff_gain\": 3}}]}");

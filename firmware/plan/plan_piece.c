@@ -757,8 +757,9 @@ static bool search_pass(search *s, int pass)
  * a 90 degree corner 0.5 um after a reversal stop, then 79 mm at 0.24 mm/s; a corner at 10 mm/s reached while
  * braking from 36 mm/s, then 12 mm at 0.4 mm/s). Such a piece, a long cruise far below the highest cap of its piece
  * after a ramp A, is a step (lsm_piece.step): the interpolator re-plans at the end of ramp A (a = 0), where the dip
- * may be behind. The piece itself is complete and verified, so a re-plan that finds nothing better keeps it; the
- * re-planned piece starts at its cruise (no ramp A, no step), so this re-plans once. */
+ * may be behind. The piece itself is complete and verified, so a re-plan that finds nothing better keeps it; a
+ * step needs a ramp A of some length (the re-planned piece, starting at its cruise, has none unless it finds a
+ * higher one), so the re-plans never repeat at one point. */
 static void slow_cruise_step(search *s)
 {
     plan5 *b = &s->best;

@@ -126,12 +126,14 @@ static void print_summary(FILE *f, const sim_run_opts *o, const sim_run_result *
         json_num(f, r->intersample_jerk_p99);
         fprintf(f, "},\n");
     }
-    if (o->planner == SIM_RUN_VPOP_CONT) {
-        fprintf(f, "  \"continuous_jerk_ratio\": ");
-        json_num(f, r->cont_jerk_max);
-        fprintf(f, ",\n  \"vpop_jerk_scale\": ");
-        json_num(f, r->vpop_jerk_scale);
-        fprintf(f, ",\n");
+    if (r->cont_ratio[0] >= 0) {
+        fprintf(f, "  \"continuous_ratio\": {\"v\": ");
+        json_num(f, r->cont_ratio[0]);
+        fprintf(f, ", \"a\": ");
+        json_num(f, r->cont_ratio[1]);
+        fprintf(f, ", \"j\": ");
+        json_num(f, r->cont_ratio[2]);
+        fprintf(f, "},\n");
     }
     fprintf(f,
             "  \"planner_stats\": {\"blocks_appended\": %u, \"corners_smoothed\": %u, \"corner_stops\": %u, "

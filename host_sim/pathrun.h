@@ -26,10 +26,10 @@
 #include "planner.h"
 #include "simprog.h"
 
-/* SIM_RUN_VPOP_CONT: VPOp held to its jerk limits continuously, not only on its samples' differences (pathrun.c,
- * vp_cont_motion: its jerk limits scaled, first by one factor for the whole path, then bin by bin along it, so that
- * the continuous axis jerk of its own motion, Beudaert eq 3 on the exact path derivatives, at the samples and
- * halfway between them, stays <= J). */
+/* SIM_RUN_VPOP_CONT, the continuous-limit reference: VPOp whose every step is also checked between its samples
+ * (pathrun.c, vp_cstep_segment): the motion between the samples is the cubic B-spline of the samples (the step's
+ * discrete jerk held over the cycle), and each axis's velocity, acceleration and jerk on it (Beudaert eq 3, exact
+ * path derivatives) must stay within the limits; the step takes the largest s that passes. */
 typedef enum sim_run_planner { SIM_RUN_LISSOM = 0, SIM_RUN_VPOP = 1, SIM_RUN_VPOP_CONT = 2 } sim_run_planner;
 
 static inline const char *sim_run_planner_name(sim_run_planner p)
@@ -111,9 +111,9 @@ typedef struct sim_run_result {
     uint32_t pl_block_bytes;     /* sizeof(lsm_pblock) of this build */
     double intersample_jerk_max; /* --planner vpop: continuous axis jerk its motion asks between samples, largest */
     double intersample_jerk_p99; /* and 99th percentile over the samples, relative to J (pathrun.c); -1: n/a */
-    double cont_jerk_max;        /* vpop: continuous axis jerk / J at the samples and halfway between (-1: n/a) */
-    double vpop_jerk_scale;      /* vpop-cont: the smallest factor its jerk limits were scaled by anywhere on the path
-                                    (1 for vpop; -1: n/a) */
+    double cont_ratio[3];        /* VPOp planners: largest axis velocity, acceleration, jerk over the limits on the
+                                    continuous motion between the samples (their cubic B-spline resampled 32 times a
+                                    cycle: pathrun.c, vp_cont_verify); -1: n/a */
     sim_run_mfunc *mfuncs;       /* the program's machine functions, in order */
     size_t n_mfuncs;
     size_t prog_held_max;  /* most program blocks + path elements held at once (simprog.h; windowed with

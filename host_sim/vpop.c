@@ -82,7 +82,7 @@ static int step_bounds(const vctx *c, const hist *h, stepb *b)
 {
     const sim_vpop_limits *L = c->lim;
     const double dt = c->dt;
-    const double jdt3 = (c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0) * dt * dt * dt;
+    const double jdt3 = dt * dt * dt;
     int ok = 1;
     for (int i = 0; i < SIM_VPOP_AXES; i++) {
         const double q0 = h->q[0][i], q1 = h->q[1][i], q2 = h->q[2][i];
@@ -317,28 +317,113 @@ static int fallback(const vctx *c, const stepb *b, int want, double *smin, doubl
     return scan_window(c, b, w0, w1, 48, want, smin, smax);
 }
 
+/* The candidate s after history h passes the continuous check (vpop.h: step_cont; 1 if there is none). */
+static int cont_ok(const vctx *c, const hist *h, double s)
+{
+    if (!c->p->step_cont)
+        return 1;
+    const double s4[4] = {h->s[2], h->s[1], h->s[0], s};
+    c->st->cont_checks++;
+    return c->p->step_cont(c->p->ctx, c->lim, c->dt, s4);
+}
+
+/* s is a feasible next step after h: within the step's range, the discrete bounds and the continuous check. */
+static int step_pass(const vctx *c, const hist *h, const stepb *b, double s)
+{
+    return s >= b->s0 && s <= b->top && viol(c, b->lo, b->hi, s) <= 0 && cont_ok(c, h, s);
+}
+
+#define CONT_GRID 8       /* points tried across the discrete set when its end fails the continuous check */
+#define CONT_BISECT 60    /* then bisection (to the search tolerance) between the first that passes and its neighbour */
+#define CONT_REL_TOL 1e-5 /* ... or to this share of the step (s - s_j): finer changes nothing measurable */
+
+/* The end of the discrete set [smin, smax] (dir +1: smax, -1: smin) moved inwards to the last point that also passes
+ * the continuous check: smax itself if it passes, else the first of CONT_GRID points towards the other end that
+ * passes, refined by bisection against its failing neighbour. Returns 0 if none passes (the set counts as empty). */
+static int cont_end(const vctx *c, const hist *h, const stepb *b, double smin, double smax, int dir, double *out)
+{
+    const double from = dir > 0 ? smax : smin, to = dir > 0 ? smin : smax;
+    if (step_pass(c, h, b, from)) {
+        *out = from;
+        return 1;
+    }
+    double fail = from;
+    for (int k = 1; k <= CONT_GRID; k++) {
+        const double x = k == CONT_GRID ? to : from + (to - from) * k / CONT_GRID;
+        if (!step_pass(c, h, b, x)) {
+            fail = x;
+            continue;
+        }
+        double ok = x;
+        const double tol = fmax(c->tol, CONT_REL_TOL * fabs(from - b->s0));
+        for (int it = 0; it < CONT_BISECT && fabs(fail - ok) > tol; it++) {
+            const double m = 0.5 * (ok + fail);
+            if (step_pass(c, h, b, m))
+                ok = m;
+            else
+                fail = m;
+        }
+        *out = ok;
+        return 1;
+    }
+    return 0;
+}
+
+/* The ends of the discrete set after h (want as next_set) into *lo, *hi. Returns 0 if it is empty. */
+static int discrete_ends(const vctx *c, const stepb *b, int want, double *lo, double *hi)
+{
+    if (!(b->top > b->slo)) {
+        if (!(viol(c, b->lo, b->hi, b->slo) <= 0))
+            return 0;
+        *lo = *hi = b->slo;
+        return 1;
+    }
+    int ok = 1;
+    if (want & 1)
+        ok = fast_end(c, b, 1, hi);
+    if (ok && (want & 2))
+        ok = fast_end(c, b, -1, lo);
+    return ok || fallback(c, b, want, lo, hi);
+}
+
 /* The feasible s for the next step after history h: *smin, *smax (want: 1 = s_max only, 2 = s_min only, 3 =
- * both). The linearised search; if it fails, the dominant-axis window scan. Returns 0 if the set is empty. */
-static int next_set(const vctx *c, const hist *h, int want, double *smin, double *smax)
+ * both). The linearised search; if it fails, the dominant-axis window scan. With cont and a continuous check
+ * (vpop.h: step_cont), the wanted ends of the discrete set are then moved inwards to the last points that pass it
+ * (cont_end; the other end is found when it is needed). Returns 0 if the set is empty. */
+static int next_set_c(const vctx *c, const hist *h, int want, int cont, double *smin, double *smax)
 {
     stepb b;
     if (!step_bounds(c, h, &b))
         return 0;
-    if (!(b.top > b.slo)) {
-        if (viol(c, b.lo, b.hi, b.slo) <= 0) {
-            *smin = *smax = b.slo;
-            return 1;
-        }
+    double lo = 0, hi = 0;
+    if (!discrete_ends(c, &b, want, &lo, &hi))
         return 0;
+    if (cont && c->p->step_cont) {
+        int have = want;
+        if ((want & 1) && !step_pass(c, h, &b, hi)) {
+            if (!(have & 2) && !discrete_ends(c, &b, 2, &lo, &hi))
+                return 0;
+            have |= 2;
+            if (!cont_end(c, h, &b, lo, hi, 1, &hi))
+                return 0;
+        }
+        if ((want & 2) && !step_pass(c, h, &b, lo)) {
+            if (!(have & 1) && !discrete_ends(c, &b, 1, &lo, &hi))
+                return 0;
+            if (!cont_end(c, h, &b, lo, hi, -1, &lo))
+                return 0;
+        }
     }
-    int ok = 1;
     if (want & 1)
-        ok = fast_end(c, &b, 1, smax);
-    if (ok && (want & 2))
-        ok = fast_end(c, &b, -1, smin);
-    if (ok)
-        return 1;
-    return fallback(c, &b, want, smin, smax);
+        *smax = hi;
+    if (want & 2)
+        *smin = lo;
+    return 1;
+}
+
+static int next_set(const vctx *c, const hist *h, int want, double *smin, double *smax)
+{
+    return next_set_c(c, h, want, 1, smin, smax);
 }
 
 static void push(const vctx *c, hist *h, double s)
@@ -406,32 +491,62 @@ static int brake_ok(const vctx *c, const double *S, long k)
     return 0;
 }
 
-/* One step of the braking sequence beta from history h (the choice brake_seq makes). */
+/* With a continuous check, a braking sequence's choice *sel between smin and smax (both pass it) may fail it: then
+ * it becomes the last point from smin towards it that passes (bisection). Returns 1. */
+static int cont_sel(const vctx *c, const hist *h, double smin, double *sel)
+{
+    if (!c->p->step_cont || *sel <= smin || cont_ok(c, h, *sel))
+        return 1;
+    double ok = smin, fail = *sel;
+    const double tol = fmax(c->tol, CONT_REL_TOL * fabs(fail - h->s[0]));
+    for (int it = 0; it < CONT_BISECT && fail - ok > tol; it++) {
+        const double m = 0.5 * (ok + fail);
+        if (cont_ok(c, h, m))
+            ok = m;
+        else
+            fail = m;
+    }
+    *sel = ok;
+    return 1;
+}
+
+/* The choice of the braking sequence beta after history h, on the discrete set (cont 0) or on the set whose ends pass
+ * the continuous check (cont 1, moved towards s_min until it passes). */
+static int brake_choice(const vctx *c, const hist *h, double beta, int cont, double *sel);
+
+/* One step of the braking sequence beta from history h (the choice brake_seq makes). With a continuous check, the
+ * choice is first made on the discrete set and kept if it passes; else it is made again with cont (brake_choice). */
 static int brake_step(const vctx *c, const hist *h, double beta, double *sel)
 {
+    if (c->p->step_cont && brake_choice(c, h, beta, 0, sel) && cont_ok(c, h, *sel))
+        return 1;
+    return brake_choice(c, h, beta, 1, sel);
+}
+
+static int brake_choice(const vctx *c, const hist *h, double beta, int cont, double *sel)
+{
     double smin, smax;
-    if (!next_set(c, h, 3, &smin, &smax))
+    if (!next_set_c(c, h, 3, cont, &smin, &smax))
         return 0;
     const double dt = c->dt, v = (h->s[0] - h->s[1]) / dt;
     if (beta >= 0) {
         const double cap = h->s[0] + v * dt; /* not faster than the last step */
         *sel = smin + beta * (fmin(smax, fmax(cap, smin)) - smin);
-        return 1;
+        return !cont || cont_sel(c, h, smin, sel);
     }
     /* the smallest s whose (v', a') can still stop cleanly: v' >= a'² / (2 J) when a' < 0, with J the tangential
      * jerk a straight line in the local direction allows, min_i J_i / |dq_i/ds| */
     double J = HUGE_VAL;
-    const double js = c->p->jscale ? c->p->jscale(c->p->ctx, h->s[0]) : 1.0;
     if (beta < -1.5) {
-        J = js * c->jt;
+        J = c->jt;
     } else {
         double q[SIM_VPOP_AXES], d[SIM_VPOP_AXES];
         eval_d(c, h->s[0], q, d);
         for (int i = 0; i < SIM_VPOP_AXES; i++)
             if ((c->lim->axis_mask & (1u << i)) && fabs(d[i]) > 1e-9)
-                J = fmin(J, js * c->lim->j[i] / fabs(d[i]));
+                J = fmin(J, c->lim->j[i] / fabs(d[i]));
         if (!(J < HUGE_VAL))
-            J = js * c->jt;
+            J = c->jt;
     }
     double lo = smin, hi = smax;
     const double s = lo;
@@ -449,14 +564,14 @@ static int brake_step(const vctx *c, const hist *h, double beta, double *sel)
             hi = m;
     }
     *sel = hi;
-    return 1;
+    return !cont || cont_sel(c, h, smin, sel);
 }
 
 /* Is s feasible as the next step after h, and does some braking sequence come to rest from there? */
 static int step_ok(const vctx *c, const hist *h, double s)
 {
     stepb b;
-    if (!step_bounds(c, h, &b) || s < b.s0 || s > b.top || viol(c, b.lo, b.hi, s) > 0)
+    if (!step_bounds(c, h, &b) || !step_pass(c, h, &b, s))
         return 0;
     hist g = *h;
     push(c, &g, s);
@@ -584,8 +699,9 @@ int sim_vpop_plan(const sim_vpop_path *p, const sim_vpop_limits *lim, double dt,
         n--;
     st->steps = (size_t)n;
     if (getenv("VPOP_DEBUG"))
-        fprintf(stderr, "vpop: %zu steps, %zu evals, %zu backtracks, %zu brake tests, %zu fallbacks\n", st->steps,
-                st->evals, st->backtracks, st->tests, st->fallbacks);
+        fprintf(stderr,
+                "vpop: %zu steps, %zu evals, %zu backtracks, %zu brake tests, %zu fallbacks, %zu continuous checks\n",
+                st->steps, st->evals, st->backtracks, st->tests, st->fallbacks, st->cont_checks);
     *s_out = S;
     *n_out = (size_t)n;
     return 0;

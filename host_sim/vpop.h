@@ -30,6 +30,10 @@
  * feasible point there = empty. s_min likewise. With linear axes only, s is also bounded by the chord of the
  * step: s0 + |P| - |J| dt³ <= s <= s0 + 1.1 (|P| + |J| dt³), P = 2 q_j - 3 q_j-1 + q_j-2.
  *
+ * Continuous check (optional, path->step_cont: the continuous-limit reference, pathrun.c vpop-cont): every candidate
+ * step (forward, braking sequences, switching step) must also pass a check of the motion between the samples; an end
+ * of the discrete set that fails it moves inwards to the last point that passes (grid, then bisection).
+ *
  * Stops: path->next_stop gives points where the motion must come to rest (corners the geometry leaves sharp,
  * where the real-time planner stops too); the planner does not pass one before it is at rest on it.
  * The motion ends at rest on s = L.
@@ -44,6 +48,8 @@
 
 #define SIM_VPOP_AXES 6
 
+struct sim_vpop_limits;
+
 typedef struct sim_vpop_path {
     double length;                                              /* L (mm) */
     void (*eval)(void *ctx, double s, double q[SIM_VPOP_AXES]); /* positions at s in [0, L] */
@@ -55,10 +61,13 @@ typedef struct sim_vpop_path {
     /* optional: the first point >= s where the motion must be at rest (a corner the geometry does not smooth),
      * or length. The planner does not pass such a point before it is at rest on it. NULL: none but L. */
     double (*next_stop)(void *ctx, double s);
-    /* optional: a factor in (0, 1] on every axis's jerk limit for the step that starts at s (a reference held to
-     * its limits between its samples lowers its jerk where its motion exceeds them there: pathrun.c, vpop-cont).
-     * NULL: 1 everywhere. */
-    double (*jscale)(void *ctx, double s);
+    /* optional: the continuous check of a step (a reference held to its limits between its samples: pathrun.c,
+     * vpop-cont). s4 = {s_j-2, s_j-1, s_j, s}: the history and the candidate s_j+1; returns 1 if the motion between
+     * the samples that this step defines holds the limits lim continuously. Every candidate (the forward step, the
+     * braking sequences, the switching step) must pass it as well as the discrete bounds: where an end of the
+     * discrete set fails, the searches move inwards to the last point that passes (a grid of CONT_GRID points, then
+     * bisection). NULL: no continuous check (plain VPOp). */
+    int (*step_cont)(void *ctx, const struct sim_vpop_limits *lim, double dt, const double s4[4]);
 } sim_vpop_path;
 
 typedef struct sim_vpop_limits {
@@ -74,11 +83,12 @@ typedef struct sim_vpop_limits {
 #define SIM_VPOP_REFINE 8
 
 typedef struct sim_vpop_stats {
-    size_t steps;      /* setpoints */
-    size_t evals;      /* path evaluations */
-    size_t backtracks; /* dichotomies run */
-    size_t tests;      /* braking sequences simulated by the dichotomies */
-    size_t fallbacks;  /* steps where the linearised search gave no answer and the window scan ran */
+    size_t steps;       /* setpoints */
+    size_t evals;       /* path evaluations */
+    size_t backtracks;  /* dichotomies run */
+    size_t tests;       /* braking sequences simulated by the dichotomies */
+    size_t fallbacks;   /* steps where the linearised search gave no answer and the window scan ran */
+    size_t cont_checks; /* continuous checks of candidate steps (path->step_cont) */
     /* the first empty set, numbered as the paper does (s_j, j = 1 the first step after s_0 = 0 at rest): the
      * step j, the steps the dichotomy then tested (in order) and the step where s_min was taken; 0: none */
     long first_fail, first_brake;

@@ -18,6 +18,7 @@
  * by more than this slack: half a cycle, plus a relative share of the times for their rounding. */
 #define STAIR_PRUNE_SLACK_CYCLES LSM_R(0.5)
 #define STAIR_PRUNE_SLACK_REL LSM_R(1e-4)
+#define STAIR_MOVED_MARGIN LSM_R(0.999)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* pieces                                                                                                       */
@@ -28,6 +29,9 @@ typedef struct plan5 {
     ramp A, B;
     lsm_real xA, xB; /* ramp starts (piece-relative); lead cruise [0, xA], cruise [xA + A.dist, xB],
                          trail cruise [xB + B.dist, D] */
+    lsm_real slack;  /* the room feas5 measured between the ramps (a guide for the cruise search, never a result):
+                        the cruise length, or, when ramp B did not fit after ramp A, about how much room it lacked
+                        (< 0); 0: not measured (something else decided) */
 } plan5;
 
 static void no_ramp(ramp *r, lsm_real dt, lsm_real v)
@@ -60,41 +64,61 @@ static bool place_B(pctx *pc, plan5 *p, bool exact)
     const lsm_real dt = pc->pl->cfg.cycle_s, D = pc->D;
     const lsm_real xa_end = p->xA + p->A.dist;
     if (p->vc > p->v1) {
-        if (!lsm_pl_fit_decel(pc, xa_end, D, p->vc, p->v1, exact, false, &p->B, &p->xB))
+        if (!lsm_pl_fit_decel(pc, xa_end, D, p->vc, p->v1, exact, false, &p->B, &p->xB)) {
+            p->slack = lsm_min2(D - p->B.dist - xa_end, R0); /* (its last try; room left: something else failed it) */
             return false;
+        }
     } else {
         no_ramp(&p->B, dt, p->vc);
         p->xB = D;
     }
-    if (p->xB < xa_end - LEN_EPS * (R1 + D))
+    p->slack = p->xB - xa_end;
+    if (p->slack < -LEN_EPS * (R1 + D))
         return false;
-    if (p->xB < xa_end)
+    if (p->slack < R0) {
         p->xB = xa_end;
+        p->slack = R0;
+    }
     return true;
 }
 
 /* The whole piece for cruise feed vc: ramp A as early as it verifies, ramp B as late, the cruise between. Ramp A is
  * placed for itself; where a cap below vc follows it (a dip that the lead cruise at v0 could pass, e.g. the corner
  * a piece starts at), ramp A moves after that dip, once (else the whole piece ran at v0). */
-static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+static bool feas5_first_A(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool catchup, plan5 *p)
 {
     p->v0 = v0;
     p->vc = vc;
     p->v1 = v1;
-    if (!(vc > R0))
-        return false;
-    if (!place_A(pc, v0, vc, p, catchup, R0) || !place_B(pc, p, exact))
+    p->slack = R0;
+    return vc > R0 && place_A(pc, v0, vc, p, catchup, R0);
+}
+
+/* The rest of feas5 once its first ramp A is placed (feas5_first_A). */
+static bool feas5_rest(pctx *pc, bool exact, bool catchup, plan5 *p)
+{
+    const lsm_real v0 = p->v0, vc = p->vc;
+    if (!place_B(pc, p, exact))
         return false;
     lsm_real xa_end = p->xA + p->A.dist;
     if (lsm_pl_region_ok(pc, xa_end, p->xB, vc))
         return true;
+    p->slack = R0;  /* (a cap, not the room, failed it) */
     lsm_real x_dip; /* (from rest there is no lead cruise: a ramp from v0 = 0 starts where the piece starts) */
     if (catchup || !(v0 > R0) || !(vc > v0) || !lsm_pl_last_below(pc, xa_end, p->xB, vc, &x_dip))
         return false;
     if (!place_A(pc, v0, vc, p, false, x_dip) || !place_B(pc, p, exact))
         return false;
     xa_end = p->xA + p->A.dist;
-    return lsm_pl_region_ok(pc, xa_end, p->xB, vc);
+    if (lsm_pl_region_ok(pc, xa_end, p->xB, vc))
+        return true;
+    p->slack = R0;
+    return false;
+}
+
+static bool feas5(pctx *pc, lsm_real v0, lsm_real vc, lsm_real v1, bool exact, bool catchup, plan5 *p)
+{
+    return feas5_first_A(pc, v0, vc, v1, catchup, p) && feas5_rest(pc, exact, catchup, p);
 }
 
 static void put_ramp(lsm_piece *pc, int at, const ramp *r, lsm_real dt)
@@ -354,7 +378,18 @@ static void try_step(pctx *pc, const ramp_tops *tops, const plan5 *best, lsm_rea
     if (!stair_may_gain(t_best - x_cmp / vmax - loss1 - loss2, need, dt, t_best, x_cmp, vmax))
         return;
     plan5 p, q;
-    if (!feas5(pc, v0, vc, lsm_min2(best->v1, vc), exact, false, &p))
+    /* the first step's ramp A alone first: the bound below with it (feas5 keeps it) or, where feas5 moves it after
+     * a dip, with the least that move can cost (stair_moved_may_gain); ramp B only when one of them may gain */
+    if (!feas5_first_A(pc, v0, vc, lsm_min2(best->v1, vc), false, &p))
+        return;
+    {
+        const lsm_real x1 = p.xA + p.A.dist, t1 = time_to(&p, dt, x1);
+        if (!(x1 < best->xB &&
+              stair_may_gain(t_best - t1 - (x_cmp - x1) / vmax - loss2, need, dt, t_best + t1, x_cmp, vmax)) &&
+            lsm_pl_region_ok(pc, x1, pc->D, vc))
+            return;
+    }
+    if (!feas5_rest(pc, exact, false, &p))
         return;
     const lsm_real x1 = p.xA + p.A.dist;
     if (!(x1 < best->xB))
@@ -515,6 +550,12 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
 /* A cruise this many cycles long or more, below (1 - node_drop) of the highest cap of its piece, is re-planned at
  * the end of ramp A (slow_cruise_step). */
 #define SLOW_CRUISE_CYCLES LSM_R(50.0)
+/* The cruise search aims SECANT_AIM of its resolution below the predicted highest feed (a verified try there leaves
+ * the bracket to close), and closes it from below with a try SECANT_CLOSE of the resolution above l. */
+#define SECANT_AIM LSM_R(0.5)
+#define SECANT_CLOSE LSM_R(0.95)
+/* After this many tries in a row on one side of the bracket, the midpoint (the interpolation is not converging). */
+#define SECANT_STALL 3
 
 /* The state of one forward search (plan_normal) over its candidate nodes. */
 typedef struct search {
@@ -635,7 +676,51 @@ static void plan_certified(search *s)
     }
 }
 
-/* The highest cruise feed: bisection between the monotone profile lo and the highest cap of the piece. */
+/* The cruise search's bracket: l verified, u not, and the room between the ramps (plan5.slack) each left, 0 where
+ * not known; `again`: how many times in a row l (> 0) or u (< 0) moved. */
+typedef struct bracket {
+    lsm_real l, u, fl, fu;
+    int again;
+} bracket;
+
+/* The next cruise feed to try in (l, u): where the room between the ramps vanishes, interpolated between the ends
+ * of the bracket (the room is about linear in the square of the feed: ramp lengths go with v²; the end that stayed
+ * twice counts half, so that it moves too), aimed SECANT_AIM of the resolution below that, or SECANT_CLOSE of it
+ * above l to close the bracket; the midpoint when the room is not known at both ends or the same end moved
+ * SECANT_STALL times in a row. */
+static lsm_real cruise_next(const bracket *b)
+{
+    const lsm_real l = b->l, u = b->u, mid = (l + u) / LSM_R(2.0), w = SPEED_RES * u;
+    lsm_real fl = b->fl, fu = b->fu;
+    if (!(fl > R0) || !(fu < R0) || b->again >= SECANT_STALL || b->again <= -SECANT_STALL)
+        return mid;
+    if (b->again >= 2)
+        fu /= LSM_R(2.0);
+    if (b->again <= -2)
+        fl /= LSM_R(2.0);
+    const lsm_real r2 = l * l + (u * u - l * l) * fl / (fl - fu);
+    lsm_real t = lsm_sqrt(r2) - SECANT_AIM * w;
+    if (t - l < SECANT_CLOSE * w)
+        t = l + SECANT_CLOSE * w; /* close the bracket from below */
+    return t > l && t < u ? t : mid;
+}
+
+static void bracket_move(bracket *b, bool ok, lsm_real v, const plan5 *p)
+{
+    const lsm_real f = p->slack;
+    if (ok) {
+        b->again = b->again > 0 ? b->again + 1 : 1;
+        b->l = v;
+        b->fl = f;
+    } else {
+        b->again = b->again < 0 ? b->again - 1 : -1;
+        b->u = v;
+        b->fu = f;
+    }
+}
+
+/* The highest cruise feed between the monotone profile lo and the highest cap of the piece: a bracket [l, u] (l
+ * verified, u not) narrowed to SPEED_RES, guided by the room the tries left between their ramps (cruise_next). */
 static void plan_cruise(search *s, lsm_real lo)
 {
     pctx *pc = &s->pc;
@@ -651,17 +736,16 @@ static void plan_cruise(search *s, lsm_real lo)
         s->have = true;
         return;
     }
-    lsm_real l = lo, u = hi;
+    bracket b = {lo, hi, s->have && s->best.vc == lo ? s->best.slack : R0, s->p.slack, 0};
     lsm_real probe = lsm_pl_cruise_for_dist(v0, v1, pc->D, s->ga, s->gj, s->gs, hi);
-    for (int it = 0; it < VC_BISECT + (s->have ? 0 : CRUISE_EXTRA_BISECT) && u - l > SPEED_RES * u; it++) {
-        const lsm_real mid = probe_mid(l, u, &probe);
-        if (feas5(pc, v0, mid, v1, s->exact, false, &s->p)) {
+    for (int it = 0; it < VC_BISECT + (s->have ? 0 : CRUISE_EXTRA_BISECT) && b.u - b.l > SPEED_RES * b.u; it++) {
+        const lsm_real mid = it == 0 ? probe_mid(b.l, b.u, &probe) : cruise_next(&b);
+        const bool ok = feas5(pc, v0, mid, v1, s->exact, false, &s->p);
+        if (ok) {
             s->best = s->p;
             s->have = true;
-            l = mid;
-        } else {
-            u = mid;
         }
+        bracket_move(&b, ok, mid, &s->p);
     }
 }
 

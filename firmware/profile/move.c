@@ -724,25 +724,31 @@ void lsm_move_phases(const lsm_move *mv, unsigned axis, lsm_phase out[LSM_MOVE_P
     lsm_scurve_phases(&mv->dec, ax->jp_dec_mm_s3, out + 8);
 }
 
-void lsm_move_phase_starts(const lsm_move *mv, unsigned axis, lsm_kin out[LSM_MOVE_PHASES])
+/* The start states of phases 0..upto (upto <= 7) of the first ramp, forward from the start. out[7] (if asked) is the
+ * first ramp's end state as computed: its velocity is the ramp's own end velocity. */
+static void ramp1_starts(const lsm_move *mv, const lsm_phase ph[LSM_MOVE_PHASES], unsigned axis, unsigned upto,
+                         lsm_kin out[LSM_MOVE_PHASES])
 {
-    lsm_phase ph[LSM_MOVE_PHASES];
-    lsm_move_phases(mv, axis, ph);
-    const lsm_move_axis *ax = &mv->axis[axis];
-    /* the first ramp and the cruise start: forward from the start */
-    lsm_kin k = {0, ax->v0_mm_s, 0, 0};
-    for (unsigned p = 0; p <= 7; p++) {
+    lsm_kin k = {0, mv->axis[axis].v0_mm_s, 0, 0};
+    for (unsigned p = 0; p <= upto; p++) {
         out[p] = k;
-        if (p < 7)
+        if (p < upto)
             lsm_phase_end(&ph[p], mv->cycle_s, &k, &k);
     }
-    /* the second ramp: backward from the exact end state. Reversed in time, the ramp vc -> v1 is the standard
-     * ramp v1 -> vc with jerk amplitude -jp_dec; the distance left at a phase start is the reversed ramp's travel. */
+}
+
+/* The start states of phases 14 down to from (from >= 8) of the second ramp, backward from the exact end state.
+ * Reversed in time, the ramp vc -> v1 is the standard ramp v1 -> vc with jerk amplitude -jp_dec; the distance left
+ * at a phase start is the reversed ramp's travel. */
+static void ramp2_starts(const lsm_move *mv, unsigned axis, unsigned from, lsm_kin out[LSM_MOVE_PHASES])
+{
+    const lsm_move_axis *ax = &mv->axis[axis];
     lsm_phase rev[7];
     lsm_scurve_phases(&mv->dec, -ax->jp_dec_mm_s3, rev);
     lsm_kin r = {0, ax->v1_mm_s, 0, 0};
     const lsm_real D = lsm_fabs(ax->distance_mm);
-    for (unsigned q = 0; q < 7; q++) { /* reversed phase q is forward phase 14 - q; its end is that one's start */
+    /* reversed phase q is forward phase 14 - q; its end is that one's start */
+    for (unsigned q = 0; q + from <= 14; q++) {
         lsm_phase_end(&rev[q], mv->cycle_s, &r, &r);
         lsm_kin *o = &out[14 - q];
         o->s_mm = D - r.s_mm;
@@ -750,9 +756,22 @@ void lsm_move_phase_starts(const lsm_move *mv, unsigned axis, lsm_kin out[LSM_MO
         o->a_mm_s2 = -r.a_mm_s2;
         o->j_mm_s3 = r.j_mm_s3;
     }
-    /* the cruise joins the two ramps exactly: its feed is (start of ramp 2 - end of ramp 1) / tc */
-    if (mv->cruise_cycles > 0) {
-        out[7].v_mm_s = (out[8].s_mm - out[7].s_mm) / ((lsm_real)mv->cruise_cycles * mv->cycle_s);
+}
+
+/* The cruise's position feed: the one that joins the two ramps' positions exactly over tc, (s8 - s7) / tc. */
+static lsm_real cruise_feed(const lsm_move *mv, const lsm_kin out[LSM_MOVE_PHASES])
+{
+    return (out[8].s_mm - out[7].s_mm) / ((lsm_real)mv->cruise_cycles * mv->cycle_s);
+}
+
+void lsm_move_phase_starts(const lsm_move *mv, unsigned axis, lsm_kin out[LSM_MOVE_PHASES])
+{
+    lsm_phase ph[LSM_MOVE_PHASES];
+    lsm_move_phases(mv, axis, ph);
+    ramp1_starts(mv, ph, axis, 7, out);
+    ramp2_starts(mv, axis, 8, out);
+    if (mv->cruise_cycles > 0) { /* the positions join exactly: the cruise's position feed (move.h) */
+        out[7].v_mm_s = cruise_feed(mv, out);
         out[7].a_mm_s2 = 0;
         out[7].j_mm_s3 = 0;
     }
@@ -763,6 +782,33 @@ void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin
     lsm_kin all[LSM_MOVE_PHASES];
     lsm_move_phase_starts(mv, axis, all);
     *out = all[p];
+}
+
+/* The state in phase p (p < LSM_MOVE_PHASES), tau_s into it, travel frame. Only the ramp that holds p is evaluated
+ * (both for the cruise). In the cruise the position follows the position feed (s7 -> s8 exactly) and the velocity is
+ * the planned cruise feed vc, the velocity both ramps were corrected to reach (eq 34) and <= v_max exactly: the
+ * ramps' evaluated ends are within a few ulps of it, whereas the position feed is off it by the two end positions'
+ * rounding over tc. That difference thus stays a position rounding of a few ulps, not a step of the velocity where
+ * the cruise joins the ramps. */
+static void eval_phase(const lsm_move *mv, unsigned axis, const lsm_phase ph[LSM_MOVE_PHASES], unsigned p,
+                       lsm_real tau_s, lsm_kin *out)
+{
+    lsm_kin st[LSM_MOVE_PHASES];
+    if (p < 7) {
+        ramp1_starts(mv, ph, axis, p, st);
+        lsm_phase_advance(&ph[p], mv->cycle_s, &st[p], tau_s, out);
+        return;
+    }
+    if (p > 7) {
+        ramp2_starts(mv, axis, p, st);
+        lsm_phase_advance(&ph[p], mv->cycle_s, &st[p], tau_s, out);
+        return;
+    }
+    ramp1_starts(mv, ph, axis, 7, st);
+    ramp2_starts(mv, axis, 8, st);
+    const lsm_kin c = {st[7].s_mm, cruise_feed(mv, st), 0, 0};
+    lsm_phase_advance(&ph[7], mv->cycle_s, &c, tau_s, out);
+    out->v_mm_s = mv->axis[axis].vc_mm_s;
 }
 
 /* Closed form in the travel frame: locate the phase, then advance from its start state; no terminal snapping. */
@@ -780,16 +826,14 @@ static void eval_travel(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real 
         m -= ph[p].n_cycles;
     }
     if (p == LSM_MOVE_PHASES) { /* past the end */
-        lsm_kin e;
-        lsm_move_phase_start(mv, axis, LSM_MOVE_PHASES - 1, &e);
-        lsm_phase_end(&ph[LSM_MOVE_PHASES - 1], mv->cycle_s, &e, out);
+        lsm_kin st[LSM_MOVE_PHASES];
+        ramp2_starts(mv, axis, LSM_MOVE_PHASES - 1, st);
+        lsm_phase_end(&ph[LSM_MOVE_PHASES - 1], mv->cycle_s, &st[LSM_MOVE_PHASES - 1], out);
         out->s_mm += out->v_mm_s * ((lsm_real)m + frac) * mv->cycle_s;
         out->j_mm_s3 = 0;
         return;
     }
-    lsm_kin st;
-    lsm_move_phase_start(mv, axis, p, &st);
-    lsm_phase_advance(&ph[p], mv->cycle_s, &st, ((lsm_real)m + frac) * mv->cycle_s, out);
+    eval_phase(mv, axis, ph, p, ((lsm_real)m + frac) * mv->cycle_s, out);
 }
 
 void lsm_move_eval_cycle(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real frac, lsm_kin *out)

@@ -88,7 +88,10 @@ void lsm_move_phases(const lsm_move *mv, unsigned axis, lsm_phase out[LSM_MOVE_P
 
 /*
  * Closed-form state of one axis at time t_s (axis frame, s_mm measured from the start). From the last cycle on
- * it returns the exact terminal state (s = distance, v = v1, a = j = 0).
+ * it returns the exact terminal state (s = distance, v = v1, a = j = 0). In the cruise, s follows the position
+ * feed and v is the planned cruise feed vc (lsm_move_phase_start). Each call evaluates only the ramp that
+ * holds t_s (both in the cruise): at most 7 closed-form phase ends (14 in the cruise), no trigonometry but that of
+ * the phase itself.
  */
 void lsm_move_eval(const lsm_move *mv, unsigned axis, lsm_real t_s, lsm_kin *out);
 
@@ -96,10 +99,16 @@ void lsm_move_eval(const lsm_move *mv, unsigned axis, lsm_real t_s, lsm_kin *out
 void lsm_move_eval_cycle(const lsm_move *mv, unsigned axis, uint32_t k, lsm_real frac, lsm_kin *out);
 
 /*
- * State at the start of phase p (0..14) of one axis, travel frame. The first ramp is evaluated forward from
- * the start, the second backward from the exact end state (reversed in time it is the standard ramp v1 -> vc),
- * and the cruise joins them exactly (its feed absorbs the rounding, ~1 ulp). So in float the rounding does not
- * pile up towards the end of a long move: the last cycles are as precise as the first.
+ * State at the start of phase p (0..14) of one axis, travel frame, as the position generators advance from it
+ * (stepgen.c, fixprog.c). The first ramp is evaluated forward from the start, the second backward from the exact
+ * end state (reversed in time it is the standard ramp v1 -> vc). So in float the rounding does not pile up towards
+ * the end of a long move: the last cycles are as precise as the first. The cruise's v (p = 7) is its position
+ * feed (s8 - s7) / tc, which joins the two ramps' positions exactly; it differs from the ramps' own end velocity by
+ * the rounding of those two positions over tc (in float a few ulp(D) / tc: 0.1 mm/s and more over one cycle at
+ * 500 mm). That difference is position rounding: the velocity of the state (lsm_move_eval, lsm_move_eval_cycle) is
+ * in the cruise the planned vc (<= v_max exactly), which both ramps' evaluated ends meet within a few ulps of vc, so
+ * it has no step where the cruise joins the ramps; the cruise's positions follow the feed, each within a few ulps of
+ * the exact curve.
  */
 void lsm_move_phase_start(const lsm_move *mv, unsigned axis, unsigned p, lsm_kin *out);
 

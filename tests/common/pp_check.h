@@ -13,16 +13,10 @@
  * Noise bounds, no tolerance: the own state PP_NOISE_ULPS ulps of the real type relative to each limit's scale (the
  * closed-form states carry a few roundings of quantities of that size); a difference of order n: 2^n PP_POS_ULPS
  * ulps of the largest |position| seen, over dt^n (each position is within PP_POS_ULPS of the exact curve).
- * Float build only, and only for |v| of the own state of a planned move: the move engine's known float cruise
- * rounding (test_ppscan.c, MOVE_CRUISE_V_REL: up to 7.0e-6 relative, firmware/profile/move.c) is allowed with
- * PP_MOVE_V_REL when the caller says the cycle is a move's (pp_check_kin2 with in_move); and, likewise only for the
- * cycles of a planned move in float, a step of v where the cruise joins the ramps of up to PP_MOVE_DV_POS_ULPS ulps
- * of the largest |position| over dt beyond A dt: move.c takes the cruise's feed from the positions of the two ramps'
- * ends, (s8 - s7) / tc (lsm_move_phase_starts: the positions join exactly, so the setpoints have no step), and each
- * of those float positions is within PP_POS_ULPS ulps, so that feed is off the ramp's own end velocity by up to
- * 2 PP_POS_ULPS ulp(|p|) / tc <= that over dt: the bound of the positions' first difference (pp_check_diffs, n = 1).
- * (test_pp_props seed 3, case 395: a type-0 move from rest to 178 mm/s over 1.96 s with A = 91 mm/s², the cruise
- * 0.0137 mm/s off the ramp's float end.)
+ * The same bounds hold for every cycle, in a planned move or not, in both builds: in a move's cruise the velocity of
+ * the demand is the planned cruise feed, which the ramps' evaluated ends meet within a few ulps (firmware/profile/
+ * move.c, eval_phase), and the rounding of the float positions of the two ramp ends stays in the positions (within
+ * the first difference's noise), not in a step of the velocity.
  */
 #ifndef PP_CHECK_H
 #define PP_CHECK_H
@@ -41,13 +35,9 @@
 #if LSM_REAL_IS_FLOAT
 #define PP_ULP_REL ((double)FLT_EPSILON)
 #define PP_CHECK_DIFF_ORDER 1
-#define PP_MOVE_V_REL 8e-6
-#define PP_MOVE_DV_POS_ULPS (2 * PP_POS_ULPS)
 #else
-#define PP_MOVE_DV_POS_ULPS 0.0
 #define PP_ULP_REL DBL_EPSILON
 #define PP_CHECK_DIFF_ORDER 4
-#define PP_MOVE_V_REL 0.0
 #endif
 
 typedef struct pp_checker {
@@ -115,7 +105,7 @@ static inline void pp_check_diffs(pp_checker *c)
     }
 }
 
-static inline void pp_check_kin2(pp_checker *c, const lsm_kin *k, bool in_move)
+static inline void pp_check_kin(pp_checker *c, const lsm_kin *k)
 {
     const double nz = PP_NOISE_ULPS * PP_ULP_REL;
     for (unsigned i = 4; i > 0; i--)
@@ -127,23 +117,17 @@ static inline void pp_check_kin2(pp_checker *c, const lsm_kin *k, bool in_move)
         c->pmax = fabs(c->p[0]);
     if (c->n > 0) {
         const lsm_kin *p = &c->prev;
-        pp_check_note(c, 0, k->v_mm_s, c->V * (1 + nz + (in_move ? PP_MOVE_V_REL : 0)), "v");
+        pp_check_note(c, 0, k->v_mm_s, c->V * (1 + nz), "v");
         pp_check_note(c, 1, k->a_mm_s2, c->A * (1 + nz), "a");
         pp_check_note(c, 2, k->j_mm_s3, c->J * (1 + nz), "j");
         if (c->S > 0)
             pp_check_note(c, 3, k->j_mm_s3 - p->j_mm_s3, c->S * c->dt + nz * c->J, "dj/dt (snap) dt");
-        const double dv_pos = in_move ? PP_MOVE_DV_POS_ULPS * PP_ULP_REL * c->pmax / c->dt : 0;
-        pp_check_note(c, 4, k->v_mm_s - p->v_mm_s, c->A * c->dt + nz * c->V + dv_pos, "dv");
+        pp_check_note(c, 4, k->v_mm_s - p->v_mm_s, c->A * c->dt + nz * c->V, "dv");
         pp_check_note(c, 5, k->a_mm_s2 - p->a_mm_s2, c->J * c->dt + nz * c->A, "da");
         pp_check_diffs(c);
     }
     c->prev = *k;
     c->n++;
-}
-
-static inline void pp_check_kin(pp_checker *c, const lsm_kin *k)
-{
-    pp_check_kin2(c, k, false);
 }
 
 #endif

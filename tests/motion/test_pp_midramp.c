@@ -16,10 +16,10 @@
  *   backward differences     of the demand positions, order n = 1..4 (v, a, j, snap; type 0 without the snap),
  *                            each within its limit. The n-th backward difference over dt^n is a weighted mean of
  *                            the n-th derivative over the last n cycles (B-spline kernel), so a profile within its
- *                            limits never exceeds them. In the float build only orders 1 and 2 (beyond, the
- *                            rounding of float positions is larger than the limits).
+ *                            limits never exceeds them. In the float build order 1 only (PP_CHECK_DIFF_ORDER:
+ *                            from order 2 on, the rounding of float positions is larger than the limits).
  * Noise bounds (never a tolerance): PP_NOISE_ULPS ulps of the real type relative to each limit on the demand's own
- * state, and for a backward difference of order n the rounding of the positions, 2^n ulp(|p|max) / dt^n.
+ * state, and for a backward difference of order n the rounding of the positions, 2^n PP_POS_ULPS ulp(|p|max) / dt^n.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -64,7 +64,7 @@ static void cycle(void)
 {
     g_app.now_us += 1000u;
     mtn_sync_cycle(&g_app.co, &g_app.mo, g_app.now_us, false);
-    pp_check_kin2(&g_chk, lsm_motion_demand(&g_app.mo, 0), g_app.mo.ax[0].prof.mode == LSM_AXPROF_MOVE);
+    pp_check_kin(&g_chk, lsm_motion_demand(&g_app.mo, 0));
 }
 
 static void boot(uint32_t lead, int ptype)

@@ -67,7 +67,7 @@ static void cycle(void)
 {
     g_app.now_us += 1000u;
     mtn_sync_cycle(&g_app.co, &g_app.mo, g_app.now_us, g_app.estop);
-    pp_check_kin2(&g_chk, lsm_motion_demand(&g_app.mo, 0), g_app.mo.ax[0].prof.mode == LSM_AXPROF_MOVE);
+    pp_check_kin(&g_chk, lsm_motion_demand(&g_app.mo, 0));
     g_cycles++;
 }
 

@@ -37,16 +37,6 @@
 #define ULP_REL DBL_EPSILON
 #endif
 #define NOISE (NOISE_ULPS * ULP_REL)
-/* Float build only, and only for the velocity of a planned move (never of a stop): the move engine's cruise feed
- * absorbs the rounding of its ramps (move.h), which in float lifts the cruise velocity of some moves from rest
- * above V by up to 7.0e-6 relative (59 ulps: e.g. a type-0 move of 15.399992 mm with this file's first profile).
- * That is firmware/profile/move.c, not the stops and retargets scanned here; reported, not fixed here. */
-#if LSM_REAL_IS_FLOAT
-#define MOVE_CRUISE_V_REL 8e-6
-#else
-#define MOVE_CRUISE_V_REL 0.0
-#endif
-
 #define CYCLE_S 0.001      /* the node's control cycle */
 #define MAX_CYCLES 200000u /* guard: no scanned move or stop comes near it */
 
@@ -98,11 +88,11 @@ static void note(checker *c, double *slot, double r)
         c->bad = true;
 }
 
-static void check_cycle(checker *c, const lsm_kin *k, bool in_move)
+static void check_cycle(checker *c, const lsm_kin *k)
 {
     const double dt = CYCLE_S;
     const lsm_kin *p = &c->prev;
-    note(c, &c->w->v, ratio(k->v_mm_s, c->V * (1 + (in_move ? MOVE_CRUISE_V_REL : 0)), c->V));
+    note(c, &c->w->v, ratio(k->v_mm_s, c->V, c->V));
     note(c, &c->w->a, ratio(k->a_mm_s2, c->A, c->A));
     note(c, &c->w->j, ratio(k->j_mm_s3, c->J, c->J));
     note(c, &c->w->snap, ratio(k->j_mm_s3 - p->j_mm_s3, c->S * dt, c->J));
@@ -117,7 +107,7 @@ static void check_cycle(checker *c, const lsm_kin *k, bool in_move)
 static void step_checked(checker *c, lsm_axprof *p)
 {
     (void)lsm_axprof_step(p);
-    check_cycle(c, &p->k, p->mode == LSM_AXPROF_MOVE);
+    check_cycle(c, &p->k);
 }
 
 /* Cycles of the undisturbed move (to know the request times to scan). */

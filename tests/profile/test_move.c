@@ -8,7 +8,10 @@
  * exactly on D with feed v1, and take no more cycles than an independent witness shape found by brute force.
  *
  * The peak search (test_peak_search_matches_bisection): from rest to rest, the move's ramps have the totals of the
- * largest peak that a plain bisection finds.   test_move [cases]   (default 3000)
+ * largest peak that a plain bisection finds.
+ *
+ * The cruise joins (test_cruise_joins_without_velocity_step): the velocity has no step where the cruise meets the
+ * ramps.   test_move [seed] [count]   (default seed 1, 3000 cases of each randomized test)
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -99,7 +102,8 @@ static void test_refused_moves_now_plan(void **state)
  * sometimes replaces the search's ramps by others that admit an exact cruise; scripts/profile_same.sh compares
  * those moves with an older revision's).
  */
-static int g_cases = 3000; /* argv[1] */
+static unsigned long long g_seed = 1; /* argv[1] */
+static int g_cases = 3000;            /* argv[2] */
 
 /* In float, the distances of peaks next to a jump of the totals are within rounding of D: the reference is taken
  * for D shrunk and grown by this (relative) and the move's totals must lie between. Exact in double. */
@@ -136,7 +140,7 @@ static uint32_t ref_peak_total(const lsm_scurve_limits *sl, lsm_real dt, double 
 static void test_peak_search_matches_bisection(void **state)
 {
     (void)state;
-    uint64_t rng = 0x5DEECE66Dull;
+    uint64_t rng = 0x5DEECE66Dull ^ (uint64_t)(g_seed - 1); /* seed 1: the cases of the test's first version */
     for (int c = 0; c < g_cases; c++) {
         lsm_move_request r = {0};
         r.n_axes = 1;
@@ -166,13 +170,121 @@ static void test_peak_search_matches_bisection(void **state)
     }
 }
 
+/*
+ * Where the cruise joins the ramps the velocity of the closed form (lsm_move_eval_cycle: what the PP generator reports
+ * as its velocity, axprof.c) has no step: the velocity just before and just after each join differ by at most the
+ * noise bound of NOISE_ULPS ulps of V, and around every phase boundary |v_k - v_k-1| <= A dt and |v_k| <= V, each with
+ * that noise (the plain own-state bound of tests/common/pp_check.h), in both builds.
+ * Long moves far from 0, low accelerations, 1 to 3 synchronised axes, some with end feeds. The float build failed this
+ * while move.c reported the cruise feed that joins the two ramps' float end positions, (s8 - s7) / tc: a few ulp(D)
+ * over a short cruise, up to 0.1 mm/s against A dt = 0.04 mm/s (seed 1 case 3: 0.082 mm/s against 0.017 mm/s).
+ */
+#define NOISE_ULPS 8.0
+#define ULP_REL (LSM_REAL_IS_FLOAT ? 1.1920928955078125e-07 : 2.220446049250313e-16)
+
+static void random_far_request(uint64_t *rng, lsm_move_request *r)
+{
+    static const double cycles[4] = {0.00025, 0.0005, 0.001, 0.002};
+    r->n_axes = (uint8_t)(1 + (test_urand(rng) < 0.3 ? (int)(test_urand(rng) * 3) : 0));
+    r->cycle_s = (lsm_real)cycles[(int)(test_urand(rng) * 4)];
+    r->rule = LSM_SCURVE_RULE_STRICT;
+    const bool feeds = test_urand(rng) < 0.25;
+    for (unsigned i = 0; i < r->n_axes; i++) {
+        lsm_axis_limits *L = &r->lim[i];
+        L->v_max_mm_s = (lsm_real)test_logu(rng, 5, 1000);
+        L->a_max_mm_s2 = (lsm_real)test_logu(rng, 5, 3000);
+        L->j_max_mm_s3 = (lsm_real)test_logu(rng, 50, 1e5);
+        const double dj_free = PI * (double)L->j_max_mm_s3 * (double)L->j_max_mm_s3 / (2 * (double)L->a_max_mm_s2);
+        L->snap_max_mm_s4 = (lsm_real)(dj_free * test_logu(rng, 1e-2, 100));
+        r->distance_mm[i] = (lsm_real)((test_urand(rng) < 0.5 ? -1 : 1) * test_logu(rng, 10, 2000));
+        r->v0_mm_s[i] = (lsm_real)(feeds ? test_urand(rng) * 0.5 * (double)L->v_max_mm_s : 0);
+        r->v1_mm_s[i] = (lsm_real)(feeds ? test_urand(rng) * 0.5 * (double)L->v_max_mm_s : 0);
+    }
+}
+
+/* The velocity's jump where the cruise begins and where it ends: the state just before a join (the phase's end,
+ * frac 0) against the state 1e-6 of a cycle after it (the next phase). Within NOISE_ULPS ulps of V, in mm/s. */
+static void join_steps(const lsm_move *mv, const lsm_move_request *r, int c, double *worst_mm_s)
+{
+    const uint32_t b1 = lsm_scurve_total_cycles(&mv->acc), b2 = b1 + mv->cruise_cycles;
+    const uint32_t at[2] = {b1, b2};
+    for (unsigned i = 0; i < r->n_axes; i++) {
+        const double V = r->lim[i].v_max_mm_s;
+        for (int h = 0; h < 2; h++) {
+            lsm_kin before, after;
+            lsm_move_eval_cycle(mv, i, at[h], 0, &before);
+            lsm_move_eval_cycle(mv, i, at[h], (lsm_real)1e-6, &after);
+            const double jump = fabs((double)after.v_mm_s - (double)before.v_mm_s);
+            *worst_mm_s = jump > *worst_mm_s ? jump : *worst_mm_s;
+            if (jump > NOISE_ULPS * ULP_REL * V) {
+                print_error("seed %llu case %d axis %u: v jumps by %.6g mm/s (%.3g ulp of V %.9g) where the cruise of "
+                            "%u cycles %s (D %.9g)\n",
+                            g_seed, c, i, jump, jump / (ULP_REL * V), V, mv->cruise_cycles, h ? "ends" : "begins",
+                            (double)r->distance_mm[i]);
+                fail();
+            }
+        }
+    }
+}
+
+static void test_cruise_joins_without_velocity_step(void **state)
+{
+    (void)state;
+    uint64_t rng = 0x2545F4914F6CDD1Dull ^ (uint64_t)g_seed;
+    long planned = 0, short_cruise = 0;
+    double worst_dv = 0, worst_v = 0, worst_join = 0;
+    for (int c = 0; c < g_cases; c++) {
+        lsm_move_request r = {0};
+        random_far_request(&rng, &r);
+        lsm_move mv;
+        if (lsm_move_plan(&mv, &r) != LSM_OK)
+            continue; /* infeasible end feeds, too long: not this test's subject */
+        planned++;
+        if (mv.cruise_cycles > 0 && mv.cruise_cycles <= 20)
+            short_cruise++;
+        lsm_phase ph[LSM_MOVE_PHASES];
+        lsm_move_phases(&mv, 0, ph);
+        const uint32_t n = lsm_move_total_cycles(&mv);
+        if (mv.cruise_cycles > 0)
+            join_steps(&mv, &r, c, &worst_join);
+        uint32_t b = 0;
+        for (unsigned p = 0; p < LSM_MOVE_PHASES; p++) {
+            b += ph[p].n_cycles;
+            for (uint32_t k = b > 2 ? b - 2 : 1; k <= b + 2 && k < n; k++) {
+                for (unsigned i = 0; i < r.n_axes; i++) {
+                    const double V = r.lim[i].v_max_mm_s, A = r.lim[i].a_max_mm_s2, dt = r.cycle_s;
+                    lsm_kin k0, k1;
+                    lsm_move_eval_cycle(&mv, i, k - 1, 0, &k0);
+                    lsm_move_eval_cycle(&mv, i, k, 0, &k1);
+                    const double dv = fabs((double)k1.v_mm_s - (double)k0.v_mm_s) / (A * dt + NOISE_ULPS * ULP_REL * V);
+                    const double v = fabs((double)k1.v_mm_s) / (V * (1 + NOISE_ULPS * ULP_REL));
+                    worst_dv = dv > worst_dv ? dv : worst_dv;
+                    worst_v = v > worst_v ? v : worst_v;
+                    if (dv > 1 || v > 1) {
+                        print_error("seed %llu case %d axis %u cycle %u of %u (cruise %u cycles): v %.9g -> %.9g, "
+                                    "ratio dv %.6g v %.6g (D %.9g V %.9g A %.9g dt %g)\n",
+                                    g_seed, c, i, k, n, mv.cruise_cycles, (double)k0.v_mm_s, (double)k1.v_mm_s, dv, v,
+                                    (double)r.distance_mm[i], V, A, dt);
+                        fail();
+                    }
+                }
+            }
+        }
+    }
+    print_message("cruise joins: %ld moves planned (%ld with a cruise of 1..20 cycles); worst |dv| / (A dt + noise) "
+                  "%.6f, |v| / V %.9f; worst jump of v at a join %.3g mm/s\n",
+                  planned, short_cruise, worst_dv, worst_v, worst_join);
+    assert_true(planned > g_cases / 2);
+}
+
 int main(int argc, char **argv)
 {
-    if (argc > 1)
-        g_cases = atoi(argv[1]);
+    g_seed = test_arg_u(argc, argv, 1, g_seed);
+    g_cases = (int)test_arg_u(argc, argv, 2, (unsigned long long)g_cases);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_refused_moves_now_plan),
         cmocka_unit_test(test_peak_search_matches_bisection),
+        cmocka_unit_test(test_cruise_joins_without_velocity_step),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_cases, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -381,59 +381,6 @@ static void test_run_trident(void **state)
     free(text);
 }
 
-/* The continuous-limit reference (`--planner vpop-cont`, pathrun.h): on the trident, plain VPOp's own motion asks
- * more than J between its samples (so the measure finds an excess where there is one), vpop-cont's asks at most J at
- * every sample and halfway between, holds the discrete limits, ends exactly, and is no faster than plain VPOp. */
-static void test_run_trident_cont(void **state)
-{
-    (void)state;
-    char path[1024], mp[1024], err[256];
-    repo_path(path, sizeof path, "host_sim/examples/trident.ngc");
-    repo_path(mp, sizeof mp, "host_sim/machines/beudaert_table1.json");
-    size_t len = 0;
-    char *text = sim_read_file(path, &len);
-    assert_non_null(text);
-    sim_machine m;
-    assert_int_equal(sim_machine_load_file(mp, &m, err, sizeof err), SIM_MACHINE_OK);
-    double dur[2] = {0, 0}, cj[2] = {0, 0};
-    for (int k = 0; k < 2; k++) {
-        sim_run_opts o;
-        memset(&o, 0, sizeof o);
-        o.machine = &m;
-        o.text = text;
-        o.len = len;
-        o.planner = k ? SIM_RUN_VPOP_CONT : SIM_RUN_VPOP;
-        sim_run_result r;
-        if (sim_run_program(&o, &r) != 0) {
-            fprintf(stderr, "%s: %s\n", sim_run_planner_name(o.planner), r.err);
-            fail();
-        }
-        double qmax = 0;
-        for (size_t i = 0; i < r.n * LSM_MAX_AXES; i++)
-            qmax = fmax(qmax, fabs(r.q[i]));
-        const double u = 8 * 2.220446049250313e-16 * (1 + qmax), dt = r.cycle_s;
-        for (int i = 0; i < m.n_axes; i++) {
-            const sim_machine_axis *x = &m.axes[i];
-            assert_true(r.max_v[x->index] <= x->v_max_u_s * (1 + 1e-9) + 2 * u / dt);
-            assert_true(r.max_a[x->index] <= x->a_max_u_s2 * (1 + 1e-9) + 4 * u / (dt * dt));
-            assert_true(r.max_j[x->index] <= x->j_max_u_s3 * (1 + 1e-9) + 8 * u / (dt * dt * dt));
-        }
-        assert_true(r.end_error == 0);
-        dur[k] = r.duration_s;
-        cj[k] = r.cont_jerk_max;
-        if (k) {
-            assert_true(r.vpop_jerk_scale > 0 && r.vpop_jerk_scale <= 1);
-            printf("  trident: vpop %.3f s (continuous jerk %.2f J), vpop-cont %.3f s (%.3f J, jerk scale %.3f)\n",
-                   dur[0], cj[0], dur[1], cj[1], r.vpop_jerk_scale);
-        }
-        sim_run_free(&r);
-    }
-    free(text);
-    assert_true(cj[0] > 1.2);
-    assert_true(cj[1] <= 1 + 1e-9);
-    assert_true(dur[1] >= dur[0]);
-}
-
 static void test_run_random_program(void **state)
 {
     (void)state;
@@ -471,10 +418,9 @@ int main(int argc, char **argv)
     g_seed = (uint64_t)test_arg_u(argc, argv, 1, g_seed);
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_line_closed_form),   cmocka_unit_test(test_fig3),
-        cmocka_unit_test(test_trident_bspline),    cmocka_unit_test(test_random_bsplines),
-        cmocka_unit_test(test_run_trident),        cmocka_unit_test(test_run_trident_cont),
-        cmocka_unit_test(test_run_random_program),
+        cmocka_unit_test(test_line_closed_form), cmocka_unit_test(test_fig3),
+        cmocka_unit_test(test_trident_bspline),  cmocka_unit_test(test_random_bsplines),
+        cmocka_unit_test(test_run_trident),      cmocka_unit_test(test_run_random_program),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

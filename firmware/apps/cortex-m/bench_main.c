@@ -301,6 +301,41 @@ static void bench_stepgen(const char *name, uint8_t n_axes)
     out_bench(name, insns_x100(counts, cycles), "cycle", cycles, max_insns);
 }
 
+/* The closed-form state of a PP move (lsm_move_eval_cycle: axprof.c calls it every cycle beside the stepgen for
+ * the velocity, acceleration and jerk), over whole 1-axis moves (the four distances): average and largest call. */
+static void call_move_eval(void *ctx, uint32_t k)
+{
+    lsm_kin kin;
+    (void)ctx;
+    lsm_move_eval_cycle(&g_mv, 0, k, 0, &kin);
+    __asm__ volatile("" ::"r"(&kin) : "memory");
+}
+
+static void bench_move_eval(const char *name)
+{
+    uint32_t calls = 0, counts = 0, max_counts = 0;
+    for (uint32_t w = 0; w < 4u; w++) {
+        make_request(1, w);
+        if (lsm_move_plan(&g_mv, &g_req) != LSM_OK) {
+            cm_out_str("bench setup failed: ");
+            cm_out_str(name);
+            cm_out_char('\n');
+            return;
+        }
+        const uint32_t n = lsm_move_total_cycles(&g_mv);
+        counts += run_counts(call_move_eval, NULL, n);
+        calls += n;
+        for (uint32_t k = 0; k < n; k++) {
+            const uint32_t t0 = systick_now();
+            call_move_eval(NULL, k);
+            const uint32_t c = counts_between(t0, systick_now());
+            max_counts = c > max_counts ? c : max_counts;
+        }
+    }
+    const int32_t max_insns = (int32_t)(max_counts * INSNS_PER_COUNT) - (int32_t)(g_overhead_x100 / 100u);
+    out_bench(name, insns_x100(counts, calls), "call", calls, max_insns);
+}
+
 /* ---- clothoid stepper: what interp.c calls per cycle on a clothoid block (lsm_clothoid_step) and at block entry
  * (lsm_clothoid_init + lsm_clothoid_stepper_init) ---- */
 
@@ -440,6 +475,7 @@ int main(void)
     bench_stepgen("stepgen_cycle_1ax", 1);
     bench_stepgen("stepgen_cycle_3ax", 3);
     bench_stepgen("stepgen_cycle_6ax", 6);
+    bench_move_eval("move_eval_cycle_1ax");
 
     /* clothoid stepper alone */
     bench_clothoid();

@@ -580,13 +580,15 @@ static double run_fast2ms(const dip_move *m, int n, double tol, double max_s)
 static void test_crawl_dip(void **state)
 {
     (void)state;
-    const dip_move reversal[4] = {
-        {{9.9959, 0, 0}, 0, 1}, {{9.995, 0, 0}, 0, 1}, {{9.9945, 0.1, 0}, 50, 0}, {{3.522, 79.3536, 0}, 50, 0}};
-    const dip_move chords[10] = {{{9.995, 0, 0}, 0, 1},         {{9.9945, 0.1, 0}, 50, 0},
-                                 {{9.993, 0.2, 0}, 50, 0},      {{9.9905, 0.3, 0}, 50, 0},
-                                 {{9.987, 0.3999, 0}, 50, 0},   {{9.9825, 0.4998, 0}, 50, 0},
-                                 {{9.977, 0.5996, 0}, 50, 0},   {{9.9705, 0.6994, 0}, 50, 0},
-                                 {{9.963, 0.7991, 0}, 50, 0},   {{2.2798, 9.7315, 0}, 50, 0}};
+    const dip_move reversal[4] = {{{9.9959, 0, 0}, 0, 1},
+                                  {{9.995, 0, 0}, 0, 1},
+                                  {{9.9945, 0.1, 0}, 50, 0},
+                                  {{3.522, 79.3536, 0}, 50, 0}};
+    const dip_move chords[10] = {{{9.995, 0, 0}, 0, 1},       {{9.9945, 0.1, 0}, 50, 0},
+                                 {{9.993, 0.2, 0}, 50, 0},    {{9.9905, 0.3, 0}, 50, 0},
+                                 {{9.987, 0.3999, 0}, 50, 0}, {{9.9825, 0.4998, 0}, 50, 0},
+                                 {{9.977, 0.5996, 0}, 50, 0}, {{9.9705, 0.6994, 0}, 50, 0},
+                                 {{9.963, 0.7991, 0}, 50, 0}, {{2.2798, 9.7315, 0}, 50, 0}};
     const struct {
         const char *name;
         const dip_move *m;
@@ -625,7 +627,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_circle),    cmocka_unit_test(test_spiral),       cmocka_unit_test(test_ellipse),
         cmocka_unit_test(test_ring3d),    cmocka_unit_test(test_ring3d_seeds), cmocka_unit_test(test_ring3d_lead_in),
         cmocka_unit_test(test_raster),    cmocka_unit_test(test_crawl),        cmocka_unit_test(test_crawl_random),
-        cmocka_unit_test(test_ring_ends),   cmocka_unit_test(test_crawl_dip),
+        cmocka_unit_test(test_ring_ends), cmocka_unit_test(test_crawl_dip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -271,6 +271,10 @@ static bool af_arc(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real
         return false;
     if (lsm_geom_arc_init_general(g, C, e1, e2, r, R0, sg * th_end, R0) != LSM_OK)
         return false;
+    /* The arc starts on p0 exactly (phi0 = 0, e1 points from C to p0): init_general's C + r e1 is off by ulp(r)
+     * (3e-5 mm at r 480 in float), a setpoint jump where the element joins what came before. */
+    for (int i = 0; i < 3; i++)
+        g->u.arc.start_mm[i] = p0[i];
     res->kind = LSM_ARCFIT_ARC;
     res->err_mm = err;
     res->radius_mm = r;

@@ -69,7 +69,7 @@ typedef struct lsm_arcfit_plane {
  * from the plane, within tol), and an arc is taken only while every point is within drift_mm of that plane, so
  * that a line in the plane still fits after it: a run that leaves the plane of a chain of arcs (a tilted ring whose
  * first plane came from rounded points) ends the chain with such a line. A line is preferred when it fits within
- * tol/4. On success writes the element to g (it starts at
+ * tol/4. On success writes the element to g (it starts exactly on
  * p0 and ends at q[n-1] within rounding, or on its projection) and returns true. Background (the planner's appends).
  */
 bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm, const lsm_arcfit_plane *plane,

@@ -547,6 +547,9 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
 /* Extra bisection steps for the highest cruise while no plan has been found yet (a plan is needed, not a better
  * one: a finer search before giving up to the fallback). */
 #define CRUISE_EXTRA_BISECT 20
+/* A cruise this many cycles long or more, below (1 - node_drop) of the highest cap of its piece, is re-planned at
+ * the end of ramp A (slow_cruise_step). */
+#define SLOW_CRUISE_CYCLES LSM_R(50.0)
 /* The cruise search aims SECANT_AIM of its resolution below the predicted highest feed (a verified try there leaves
  * the bracket to close), and closes it from below with a try SECANT_CLOSE of the resolution above l. */
 #define SECANT_AIM LSM_R(0.5)
@@ -833,6 +836,30 @@ static bool search_pass(search *s, int pass)
     return skipped_short;
 }
 
+/* A piece has one cruise: a dip near its start that is no node (closer than SHORT_PIECE_CYCLES, or passed by ramp
+ * A while it slows down) holds the whole cruise at the dip's speed, however long and fast the rest (fuzz_gcode_path:
+ * a 90 degree corner 0.5 um after a reversal stop, then 79 mm at 0.24 mm/s; a corner at 10 mm/s reached while
+ * braking from 36 mm/s, then 12 mm at 0.4 mm/s). Such a piece, a long cruise far below the highest cap of its piece
+ * after a ramp A, is a step (lsm_piece.step): the interpolator re-plans at the end of ramp A (a = 0), where the dip
+ * may be behind. The piece itself is complete and verified, so a re-plan that finds nothing better keeps it; a
+ * step needs a ramp A of some length (the re-planned piece, starting at its cruise, has none unless it finds a
+ * higher one), so the re-plans never repeat at one point. */
+static void slow_cruise_step(search *s)
+{
+    plan5 *b = &s->best;
+    const lsm_planner *pl = s->pl;
+    if (b->step || !(b->A.dist > R0) || b->vc == b->v0 || !(b->vc > R0))
+        return;
+    const lsm_real cruise = b->xB - (b->xA + b->A.dist);
+    if (!(cruise > SLOW_CRUISE_CYCLES * pl->cfg.cycle_s * b->vc))
+        return;
+    lsm_real mx = R0;
+    for (uint32_t id = s->pc.id0; id != s->pc.id_end; id++)
+        mx = lsm_max2(mx, cap_of(pl, id));
+    if (b->vc < (R1 - pl->cfg.node_drop) * mx)
+        b->step = true;
+}
+
 /* The NORMAL piece from (id0, off0) at v0 (a = 0): true and the plan, or false (pc: the last piece tried). Pass 1
  * (only if pass 0 found nothing and skipped a short piece) also stops at the close valley node. */
 static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp)
@@ -848,6 +875,8 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
         (void)search_pass(&s, 1);
     if (s.have && !s.catchup)
         staircase(&s.pc, &s.best);
+    if (s.have)
+        slow_cruise_step(&s);
     *pcp = s.pc;
     if (s.have)
         *bestp = s.best;

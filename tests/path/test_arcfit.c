@@ -16,6 +16,8 @@
  *   chain plane tilted by 1e-4 .. 3e-4 rad (random rings, a quarter turn);
  * - a given plane: lines projected into it, arcs refused beyond drift_mm (the line then closes the chain), line-only
  *   kinds, and after a line an arc whose plane holds it.
+ * - every fitted element starts on p0 exactly (the random arcs, and golden: a fuzzed program's arc of R 480 from the
+ *   origin, whose float start was C + r e1, 3e-5 mm off p0: a setpoint jump of 4e6 mm/s³ at the first cycle).
  */
 #include <math.h>
 #include <setjmp.h>
@@ -129,6 +131,36 @@ static void test_float_straight_pair(void **state)
     }
 }
 
+/* Starts exactly on p0: position at s = 0 (fuzz_gcode_path_float finding crash-1237252c, machine aniso, G64 P1.01:
+ * `G1 X10.0341 Y0.0922 F2500` / `G1 X10.1033 Y0.2790` / `G1 X30.4475 Y1.2092` from the origin, fitted within
+ * fit_share 0.5 of 1.01 mm as one arc of R 480; its float start was (-2.4e-7, 3.05e-5)). */
+static void assert_starts_on(const lsm_geom *g, const lsm_real p0[3], const char *what)
+{
+    lsm_real pos[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_geom_eval(g, LSM_R(0.0), pos, NULL, NULL), LSM_OK);
+    for (int k = 0; k < 3; k++)
+        if (pos[k] != p0[k]) {
+            print_message("FAILED %s: start axis %d %.17g != p0 %.17g (seed %llu)\n", what, k, (double)pos[k],
+                          (double)p0[k], g_seed);
+            fail();
+        }
+}
+
+static void test_arc_starts_on_p0(void **state)
+{
+    (void)state;
+    const lsm_real p0[3] = {0, 0, 0};
+    const lsm_arcfit_pt q[3] = {{{LSM_R(10.0341), LSM_R(0.0922), 0}, 1},
+                                {{LSM_R(10.1033), LSM_R(0.2790), 0}, 2},
+                                {{LSM_R(30.4475), LSM_R(1.2092), 0}, 3}};
+    lsm_geom g;
+    lsm_arcfit_result r;
+    assert_true(lsm_arcfit_fit(p0, q, 3, LSM_R(0.505), NULL, &g, &r));
+    assert_int_equal(r.kind, LSM_ARCFIT_ARC);
+    assert_true((double)r.radius_mm > 100.0); /* a large radius: float ulp(r) is far above ulp of the start */
+    assert_starts_on(&g, p0, "golden R 480 arc");
+}
+
 /* Random straight runs: always a line. */
 static void test_straight_runs_random(void **state)
 {
@@ -214,6 +246,7 @@ static void test_arcs_random(void **state)
         if (!ok)
             continue;
         arcs += r.kind == LSM_ARCFIT_ARC;
+        assert_starts_on(&g, p0, "random arc");
         double P[LSM_ARCFIT_MAX + 1][3];
         poly(p0, q, n, P);
         double a, b;
@@ -366,7 +399,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_float_straight_pair), cmocka_unit_test(test_straight_runs_random),
         cmocka_unit_test(test_arcs_random),         cmocka_unit_test(test_chain_plane_random),
-        cmocka_unit_test(test_given_plane),
+        cmocka_unit_test(test_given_plane),         cmocka_unit_test(test_arc_starts_on_p0),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -505,6 +505,105 @@ static void test_crawl_random(void **state)
     }
 }
 
+/* A move of run_fast2ms: its end, feed (mm/s) and whether it is a rapid. */
+typedef struct dip_move {
+    double p[3];
+    double f;
+    int rapid;
+} dip_move;
+
+/* Runs the moves from the origin on fuzz_gcode_path's machine fast2ms (tests/fuzz/fz_path.h: 2 ms; v 1000, a 2e4,
+ * j 1e6, snap 1e9 on X Y Z) with its 24-block look-ahead, appending while the planner takes blocks (a cycle at each
+ * LSM_E_FULL), tolerance tol (0: G61); returns the machine time, or -1 unless it ended exactly on the last end. */
+static double run_fast2ms(const dip_move *m, int n, double tol, double max_s)
+{
+    lsm_planner_config cfg;
+    lsm_planner_default_config(&cfg);
+    cfg.cycle_s = LSM_R(0.002);
+    cfg.axis_mask = 7;
+    for (int a = 0; a < 3; a++) {
+        cfg.axis[a].v_max = LSM_R(1000.0);
+        cfg.axis[a].a_max = LSM_R(20000.0);
+        cfg.axis[a].j_max = LSM_R(1e6);
+        cfg.axis[a].snap_max = LSM_R(1e9);
+    }
+    static lsm_pblock store[24];
+    static lsm_planner pl;
+    static lsm_interp ip;
+    const lsm_real start[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 24u, start), LSM_OK);
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    const long max_cycles = (long)(max_s / 0.002);
+    long k = 0;
+    lsm_real pos[LSM_MAX_AXES] = {0};
+    lsm_interp_state st = LSM_INTERP_IDLE;
+    for (int i = 0; i <= n && k < max_cycles;) {
+        lsm_status as;
+        if (i < n) {
+            lsm_real e[LSM_MAX_AXES] = {0};
+            for (int a = 0; a < 3; a++)
+                e[a] = (lsm_real)m[i].p[a];
+            const lsm_planner_move mv = {(lsm_real)m[i].f, (lsm_real)tol, (uint32_t)i + 1u, (uint8_t)m[i].rapid};
+            as = lsm_planner_append_line(&pl, e, &mv);
+        } else {
+            as = lsm_planner_finish(&pl);
+        }
+        if (as == LSM_E_FULL) {
+            (void)lsm_interp_prepare(&ip);
+            st = lsm_interp_step(&ip, pos);
+            k++;
+            continue;
+        }
+        assert_int_equal(as, LSM_OK);
+        i++;
+    }
+    for (; k < max_cycles && st != LSM_INTERP_DONE; k++) {
+        (void)lsm_interp_prepare(&ip);
+        st = lsm_interp_step(&ip, pos);
+    }
+    if (st != LSM_INTERP_DONE || pl.stats.plan_fallbacks != 0)
+        return -1.0;
+    for (int a = 0; a < 3; a++)
+        if (pos[a] != (lsm_real)m[n - 1].p[a])
+            return -1.0;
+    return (double)k * 0.002;
+}
+
+/* A dip near a piece's start that is no node held the piece's one cruise at the dip's speed for the whole rest
+ * (fuzz_gcode_path findings, machine fast2ms, G64 P0.01, F3000):
+ *  - a reversal stop (G0 X9.9959, G0 X9.995), then a 90 degree corner 0.45 um later (cap 0.33 mm/s, closer than
+ *    SHORT_PIECE_CYCLES: no node), then 79 mm: 88 s and more at 0.24 mm/s (crash-54365751);
+ *  - eight 0.1 mm chords of a circle at 36 mm/s, then a 36 degree corner onto a 11.7 mm chord (cap 10.4 mm/s), too
+ *    close to brake to its W with a = 0 there: the piece braked through it to 0.4 mm/s and cruised there, 29.9 s
+ *    (crash-83da4601).
+ * Now such a piece is re-planned where ramp A ends: within the bound of test_crawl_random against G61. */
+static void test_crawl_dip(void **state)
+{
+    (void)state;
+    const dip_move reversal[4] = {{{9.9959, 0, 0}, 0, 1},
+                                  {{9.995, 0, 0}, 0, 1},
+                                  {{9.9945, 0.1, 0}, 50, 0},
+                                  {{3.522, 79.3536, 0}, 50, 0}};
+    const dip_move chords[10] = {{{9.995, 0, 0}, 0, 1},       {{9.9945, 0.1, 0}, 50, 0},
+                                 {{9.993, 0.2, 0}, 50, 0},    {{9.9905, 0.3, 0}, 50, 0},
+                                 {{9.987, 0.3999, 0}, 50, 0}, {{9.9825, 0.4998, 0}, 50, 0},
+                                 {{9.977, 0.5996, 0}, 50, 0}, {{9.9705, 0.6994, 0}, 50, 0},
+                                 {{9.963, 0.7991, 0}, 50, 0}, {{2.2798, 9.7315, 0}, 50, 0}};
+    const struct {
+        const char *name;
+        const dip_move *m;
+        int n;
+    } cases[2] = {{"reversal then corner", reversal, 4}, {"chords then corner", chords, 10}};
+    for (int c = 0; c < 2; c++) {
+        const double t64 = run_fast2ms(cases[c].m, cases[c].n, 0.01, 200.0);
+        const double t61 = run_fast2ms(cases[c].m, cases[c].n, 0.0, 200.0);
+        const double bound = t61 / (1.0 - LSM_PLANNER_NODE_DROP) + 0.1;
+        print_message("crawl_dip %s: G64 P0.01 %.3f s, G61 %.3f s (bound %.3f s)\n", cases[c].name, t64, t61, bound);
+        assert_true(t64 > 0 && t61 > 0);
+        assert_true(t64 <= bound);
+    }
+}
+
 /* A 3-D ring whose last point closes a run of LSM_ARCFIT_MAX points (emitted at once, in the previous arc's
  * plane, off its last point by that point's distance from the plane): the program still ends exactly on it. */
 static void test_ring_ends(void **state)
@@ -528,7 +627,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_circle),    cmocka_unit_test(test_spiral),       cmocka_unit_test(test_ellipse),
         cmocka_unit_test(test_ring3d),    cmocka_unit_test(test_ring3d_seeds), cmocka_unit_test(test_ring3d_lead_in),
         cmocka_unit_test(test_raster),    cmocka_unit_test(test_crawl),        cmocka_unit_test(test_crawl_random),
-        cmocka_unit_test(test_ring_ends),
+        cmocka_unit_test(test_ring_ends), cmocka_unit_test(test_crawl_dip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

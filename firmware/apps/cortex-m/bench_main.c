@@ -267,18 +267,25 @@ static void bench_move_plan(const char *name, uint8_t n_axes)
 }
 
 /* Per-cycle evaluation over whole moves (the four distances): average and largest single cycle. */
+/* Plans move `which` of `n_axes` axes into g_mv for the benchmark `name`; says so and returns false if it fails. */
+static bool plan_bench_move(const char *name, uint8_t n_axes, uint32_t which)
+{
+    make_request(n_axes, which);
+    if (lsm_move_plan(&g_mv, &g_req) == LSM_OK)
+        return true;
+    cm_out_str("bench setup failed: ");
+    cm_out_str(name);
+    cm_out_char('\n');
+    return false;
+}
+
 static void bench_stepgen(const char *name, uint8_t n_axes)
 {
     uint32_t cycles = 0, counts = 0, max_counts = 0;
     bool max_at_boundary = false;
     for (uint32_t w = 0; w < 4u; w++) {
-        make_request(n_axes, w);
-        if (lsm_move_plan(&g_mv, &g_req) != LSM_OK) {
-            cm_out_str("bench setup failed: ");
-            cm_out_str(name);
-            cm_out_char('\n');
+        if (!plan_bench_move(name, n_axes, w))
             return;
-        }
         const uint32_t n = lsm_move_total_cycles(&g_mv);
         (void)lsm_stepgen_init(&g_gen, &g_mv, NULL);
         counts += run_counts(call_stepgen_next, NULL, n);
@@ -315,13 +322,8 @@ static void bench_move_eval(const char *name)
 {
     uint32_t calls = 0, counts = 0, max_counts = 0;
     for (uint32_t w = 0; w < 4u; w++) {
-        make_request(1, w);
-        if (lsm_move_plan(&g_mv, &g_req) != LSM_OK) {
-            cm_out_str("bench setup failed: ");
-            cm_out_str(name);
-            cm_out_char('\n');
+        if (!plan_bench_move(name, 1, w))
             return;
-        }
         const uint32_t n = lsm_move_total_cycles(&g_mv);
         counts += run_counts(call_move_eval, NULL, n);
         calls += n;

@@ -18,7 +18,6 @@
  * by more than this slack: half a cycle, plus a relative share of the times for their rounding. */
 #define STAIR_PRUNE_SLACK_CYCLES LSM_R(0.5)
 #define STAIR_PRUNE_SLACK_REL LSM_R(1e-4)
-#define STAIR_MOVED_MARGIN LSM_R(0.999)
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* pieces                                                                                                       */
@@ -378,8 +377,8 @@ static void try_step(pctx *pc, const ramp_tops *tops, const plan5 *best, lsm_rea
     if (!stair_may_gain(t_best - x_cmp / vmax - loss1 - loss2, need, dt, t_best, x_cmp, vmax))
         return;
     plan5 p, q;
-    /* the first step's ramp A alone first: the bound below with it (feas5 keeps it) or, where feas5 moves it after
-     * a dip, with the least that move can cost (stair_moved_may_gain); ramp B only when one of them may gain */
+    /* the first step's ramp A alone first: ramp B is planned only when the gain bound with that ramp A may still
+     * win, or when a cap below vc after it (lsm_pl_region_ok fails) would make feas5_rest move ramp A after a dip */
     if (!feas5_first_A(pc, v0, vc, lsm_min2(best->v1, vc), false, &p))
         return;
     {
@@ -676,6 +675,15 @@ static void plan_certified(search *s)
     }
 }
 
+/* The highest cap of the blocks the search's piece spans (plan_cruise's top, slow_cruise_step's reference). */
+static lsm_real piece_cap_max(const search *s)
+{
+    lsm_real mx = R0;
+    for (uint32_t id = s->pc.id0; id != s->pc.id_end; id++)
+        mx = lsm_max2(mx, cap_of(s->pl, id));
+    return mx;
+}
+
 /* The cruise search's bracket: l verified, u not, and the room between the ramps (plan5.slack) each left, 0 where
  * not known; `again`: how many times in a row l (> 0) or u (< 0) moved. */
 typedef struct bracket {
@@ -725,10 +733,7 @@ static void plan_cruise(search *s, lsm_real lo)
 {
     pctx *pc = &s->pc;
     const lsm_real v0 = s->v0, v1 = s->v1;
-    lsm_real mx = R0;
-    for (uint32_t id = pc->id0; id != pc->id_end; id++)
-        mx = lsm_max2(mx, cap_of(s->pl, id));
-    const lsm_real hi = lsm_max2(lo, mx);
+    const lsm_real hi = lsm_max2(lo, piece_cap_max(s));
     if (!(hi > lo) || !(s->have || !(v0 > v1)))
         return;
     if (feas5(pc, v0, hi, v1, s->exact, false, &s->p)) {
@@ -853,10 +858,7 @@ static void slow_cruise_step(search *s)
     const lsm_real cruise = b->xB - (b->xA + b->A.dist);
     if (!(cruise > SLOW_CRUISE_CYCLES * pl->cfg.cycle_s * b->vc))
         return;
-    lsm_real mx = R0;
-    for (uint32_t id = s->pc.id0; id != s->pc.id_end; id++)
-        mx = lsm_max2(mx, cap_of(pl, id));
-    if (b->vc < (R1 - pl->cfg.node_drop) * mx)
+    if (b->vc < (R1 - pl->cfg.node_drop) * piece_cap_max(s))
         b->step = true;
 }
 

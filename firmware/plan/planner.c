@@ -326,10 +326,14 @@ bool lsm_pl_commitment_kept(lsm_planner *pl)
     /* The test depends on the blocks from e to the node after it and on that node's W. A backward pass that stopped
      * at or after that node (bp_stop: everything before it unchanged) changed none of it, unless the stretch runs
      * to the end of the buffer (a trim, or new blocks behind it). Else verified afresh, not read from the node's
-     * W: valleys move when blocks are appended (a node can vanish, or the one after it change). */
+     * W: valleys move when blocks are appended (a node can vanish, or the one after it change).
+     * That holds for a new commitment too (commit_dirty, a piece taken since the last check): the interpolator
+     * takes a piece only on the planner generation it was planned on (interp.h; every append changes it), so no
+     * backward pass ran between its planning, which verified its arrival at e, and this one. (Verifying every new
+     * commitment afresh cost an arrival test per piece, 1-3 ramp verifications, in the append after it.) */
     lsm_real w2;
     const uint32_t n2 = lsm_pl_node_after(pl, e, &w2);
-    if (n2 != pl->tail && !id_lt(pl->bp_stop, n2) && !pl->commit_dirty)
+    if (n2 != pl->tail && !id_lt(pl->bp_stop, n2))
         return true;
     const bool ok = lsm_pl_arrival_ok(pl, e, pl->horizon_end_v);
     if (ok)

@@ -365,9 +365,7 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
             return st;
     }
     if (!eligible) {
-        if (lsm_planner_free(pl) < 3)
-            return LSM_E_FULL;
-        st = lsm_pl_append_geom(pl, g, mv, end, NULL);
+        st = lsm_pl_push_or_hold(pl, g, mv, end);
         if (st == LSM_OK)
             pl->stats.appended++;
         return st;

@@ -98,6 +98,7 @@ typedef struct wsearch {
     bool exact;
     lsm_real lo, hi;
     int tests;
+    uint32_t cost; /* ramp verifications of the last test */
 } wsearch;
 
 /* Tests v if it lies inside the bracket (and the test budget is not spent); true if it passed. */
@@ -108,12 +109,14 @@ static bool ws_try(wsearch *s, lsm_real v)
     s->tests++;
     ramp r;
     lsm_real xs;
-    if (lsm_pl_w_test(&s->pc, v, s->w1, s->exact, &r, &xs)) {
+    const uint32_t c0 = s->pc.pl->stats.checks;
+    const bool ok = lsm_pl_w_test(&s->pc, v, s->w1, s->exact, &r, &xs);
+    s->cost = s->pc.pl->stats.checks - c0;
+    if (ok)
         s->lo = v;
-        return true;
-    }
-    s->hi = v;
-    return false;
+    else
+        s->hi = v;
+    return ok;
 }
 
 static bool ws_open(const wsearch *s)
@@ -121,10 +124,11 @@ static bool ws_open(const wsearch *s)
     return s->hi - s->lo > SPEED_RES * s->hi && s->tests < W_TESTS;
 }
 
-/* A guess g of W and the tests that close the bracket next to it: one just above it when it passes; when it fails,
- * steps just under SPEED_RES below it, at most W_DESCENT (W is then within SPEED_RES of the first that passes: as
- * close as the bisection gets, in two or three tests instead of five or more; a guess fails mostly for want of room,
- * which is told before any verification). */
+/* A guess g of W and the tests that close the bracket next to it: one just above it when it passes; when it fails
+ * for want of room (told before any verification, so cheaply), steps just under SPEED_RES below it while they fail
+ * that way, at most W_DESCENT (W is then within SPEED_RES of the first that passes: as close as the bisection gets,
+ * in two or three tests instead of five or more). A failure that took verifications (the budgets, not the room)
+ * leaves the rest to the bisection. */
 static void ws_guess(wsearch *s, lsm_real g)
 {
     if (!ws_open(s) || !(g > s->lo && g < s->hi))
@@ -133,7 +137,7 @@ static void ws_guess(wsearch *s, lsm_real g)
         (void)ws_try(s, g * (R1 + W_STEP * SPEED_RES));
         return;
     }
-    for (int k = 0; k < W_DESCENT && ws_open(s); k++)
+    for (int k = 0; k < W_DESCENT && ws_open(s) && s->cost == 0u; k++)
         if (ws_try(s, s->hi * (R1 - W_STEP * SPEED_RES)))
             return;
 }
@@ -155,6 +159,7 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     s.w1 = w1;
     s.exact = exact;
     s.tests = 0;
+    s.cost = 0;
     const lsm_real c0 = cap_of(pl, id);
     const lsm_real D = s.pc.D;
     const lsm_real mincap = lsm_pl_range_cap(&s.pc, R0, D);

@@ -4,19 +4,22 @@
  *
  *   test_planner_append [seed] [count]   (default: seed 1, 12 programs)
  *
- *   - test_line_after_arc: a G1 right after a programmed arc is appended at once (a fitted arc cannot follow a
- *     programmed one, plan_fit.c run_may_start), with its corner; the arc after it then smooths one corner, not
- *     two (before: the line was held as a run's first point and the arc's append emitted it too: two corners and
- *     two backward passes in one call, the worst append of the M4 dense benchmark). A G1 after a line is still
- *     held for arc fitting.
+ *   - test_one_block_per_append: an append pushes at most one block with its corner smoothing and backward pass
+ *     (planner.c, "one block per append"): an arc whose append emits the pending G1 run is held for the next call
+ *     (its slots reserved: lsm_planner_free, lsm_planner_count), which pushes it first and holds its own block if
+ *     it has one; lsm_planner_flush pushes it. A G1 right after a programmed arc is not held for arc fitting (no
+ *     fitted arc may follow a programmed one, plan_fit.c run_may_start); a G1 after a line is. (Before: the arc's
+ *     append emitted the G1 held before it too, two corners and two backward passes in one call, the worst append
+ *     of the M4 dense benchmark.)
  *   - test_nodes_certified (randomized): programs of the M4 dense benchmark's kinds (dense polylines, zigzags, half
  *     circles joined by lines at 0.3 rad corners, random feeds and tolerances) streamed into a 64-block buffer as a
  *     controller would (append while 3 slots are free, one prepare and one step per cycle). After every append,
  *     every node's W passes its own test against the node after it (lsm_pl_arrival_ok: one verified ramp from W
  *     reaches the next node's W, or a cruise at W goes through), so the W search (plan_nodes.c node_w: guesses with
- *     closing tests, then bisection) only ever keeps certified speeds; at most one corner per append outside the
- *     emission of a pending run; the run ends exactly on its last point with no fallback piece and no piece planned
- *     in the cycle.
+ *     closing tests, then bisection) only ever keeps certified speeds; at most one corner per append when no run
+ *     was pending (a pending run that is not fitted is emitted a segment and a corner per point); the count of
+ *     blocks includes the held one; the run ends exactly on its last point with no fallback piece and no piece
+ *     planned in the cycle.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -73,36 +76,56 @@ static lsm_status arc_to(double x, double y, double cx, double cy, int dir, cons
     return lsm_planner_append_arc(&g_pl, end, c, LSM_GEOM_PLANE_XY, dir, 0u, mv);
 }
 
-static void test_line_after_arc(void **state)
+static void test_one_block_per_append(void **state)
 {
     (void)state;
     init_planner();
     const lsm_planner_move mv = move_of(100.0, 0.02);
     assert_int_equal(line_to(10.0, 0.0, &mv), LSM_OK);
     assert_int_equal(g_pl.fit_n, 1u); /* a line after the start: held for arc fitting */
-    /* a left half circle R 2 from (10, 0): the held line is emitted first */
+    assert_int_equal(g_pl.tail, 0u);
+    /* a left half circle R 2 from (10, 0): the held line is emitted (pushed), so the arc is held */
     assert_int_equal(arc_to(10.0, 4.0, 10.0, 2.0, 1, &mv), LSM_OK);
     assert_int_equal(g_pl.fit_n, 0u);
-    /* a 3 mm line 0.3 rad off the arc's end tangent (-X): appended at once, with its corner */
-    const uint32_t corners0 = g_pl.stats.corners, tail0 = g_pl.tail;
+    assert_int_equal(g_pl.tail, 1u);
+    assert_int_equal(g_pl.held, 1u);
+    assert_int_equal(lsm_planner_count(&g_pl), 2u);
+    assert_int_equal(lsm_planner_free(&g_pl), CAP - 1u - 3u); /* the held arc's slots are reserved */
+    /* a 3 mm line 0.3 rad off the arc's end tangent (-X): the call pushes the arc (its corner) and holds the line
+     * (a G1 after a programmed arc is not held for fitting: no fitted arc may follow a programmed one) */
     const double h = 3.14159265358979 + 0.3;
     const double x1 = 10.0 + 3.0 * cos(h), y1 = 4.0 + 3.0 * sin(h);
+    uint32_t corners = g_pl.stats.corners;
     assert_int_equal(line_to(x1, y1, &mv), LSM_OK);
     assert_int_equal(g_pl.fit_n, 0u);
-    assert_int_equal(g_pl.stats.corners, corners0 + 1u);
-    assert_int_equal(g_pl.tail, tail0 + 3u); /* the corner's clothoid pair and the line */
-    assert_true(g_pl.tail_pos[0] == (lsm_real)x1 && g_pl.tail_pos[1] == (lsm_real)y1);
-    /* the next half circle (right, G2) smooths one corner: its own */
+    assert_int_equal(g_pl.held, 1u);
+    assert_true(g_pl.stats.corners <= corners + 1u);
+    assert_true(fabs((double)g_pl.tail_pos[0] - 10.0) < 1e-4 && fabs((double)g_pl.tail_pos[1] - 4.0) < 1e-4);
+    /* the next half circle (right, G2): pushes the held line with its corner, holds itself */
     const double nx = -sin(h), ny = cos(h); /* left of the heading; a right turn goes the other way */
-    const uint32_t corners1 = g_pl.stats.corners;
-    assert_int_equal(arc_to(x1 - 4.0 * nx, y1 - 4.0 * ny, x1 - 2.0 * nx, y1 - 2.0 * ny, -1, &mv), LSM_OK);
-    assert_int_equal(g_pl.stats.corners, corners1 + 1u);
-    /* a line after a line is still held */
-    assert_int_equal(line_to(x1 - 4.0 * nx - 3.0 * cos(h), y1 - 4.0 * ny - 3.0 * sin(h), &mv), LSM_OK);
-    const uint32_t tail2 = g_pl.tail;
-    assert_int_equal(line_to(x1 - 4.0 * nx - 6.0 * cos(h + 0.2), y1 - 4.0 * ny - 6.0 * sin(h + 0.2), &mv), LSM_OK);
+    const double x2 = x1 - 4.0 * nx, y2 = y1 - 4.0 * ny;
+    corners = g_pl.stats.corners;
+    assert_int_equal(arc_to(x2, y2, x1 - 2.0 * nx, y1 - 2.0 * ny, -1, &mv), LSM_OK);
+    assert_int_equal(g_pl.stats.corners, corners + 1u);
+    assert_int_equal(g_pl.held, 1u);
+    assert_true(g_pl.tail_pos[0] == (lsm_real)x1 && g_pl.tail_pos[1] == (lsm_real)y1);
+    /* a paused stream flushes: the held arc is pushed */
+    corners = g_pl.stats.corners;
+    assert_int_equal(lsm_planner_flush(&g_pl), LSM_OK);
+    assert_int_equal(g_pl.held, 0u);
+    assert_int_equal(g_pl.stats.corners, corners + 1u);
+    assert_int_equal(lsm_planner_count(&g_pl), g_pl.tail - g_pl.head);
+    /* a line after it is pushed at once (nothing else pushed in that call) */
+    const uint32_t tail3 = g_pl.tail;
+    assert_int_equal(line_to(x2 - 3.0 * cos(h), y2 - 3.0 * sin(h), &mv), LSM_OK);
+    assert_int_equal(g_pl.held, 0u);
+    assert_int_equal(g_pl.fit_n, 0u);
+    assert_true(g_pl.tail > tail3);
+    /* a line after a line is held for fitting */
+    const uint32_t tail4 = g_pl.tail;
+    assert_int_equal(line_to(x2 - 6.0 * cos(h + 0.2), y2 - 6.0 * sin(h + 0.2), &mv), LSM_OK);
     assert_int_equal(g_pl.fit_n, 1u);
-    assert_int_equal(g_pl.tail, tail2);
+    assert_int_equal(g_pl.tail, tail4);
 }
 
 /* Every node's W passes its own test against the node after it (the backward pass's certificate). */
@@ -198,6 +221,7 @@ static void run_program(unsigned prog, uint64_t *rs)
                 fail();
             }
             check_nodes(prog, item);
+            assert_int_equal(lsm_planner_count(&g_pl), g_pl.tail - g_pl.head + g_pl.held);
             item++;
             have = gen_next(&g, rs, &arc, end, c, &dir);
         }
@@ -233,7 +257,7 @@ int main(int argc, char **argv)
     g_seed = test_arg_u(argc, argv, 1, 1);
     g_count = test_arg_u(argc, argv, 2, 12);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_line_after_arc),
+        cmocka_unit_test(test_one_block_per_append),
         cmocka_unit_test(test_nodes_certified),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));

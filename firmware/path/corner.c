@@ -872,12 +872,13 @@ static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc,
     const lsm_real aim0 = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
     const lsm_real a = Y / hc;
     const lsm_real bq = CN_PATH_DEV_COEF * lsm_fabs(cc->k[1] - cc->k[0]);
-    /* the first scale from max(a L, b L^2) = aim: the turn's vertex deviation and the path deviation of the
-     * curvature jump peak in different places, so the larger one is the deviation (an arc into a line at 0.3 rad came
-     * out at 0.88 of the target when aimed with their sum, below the accepted band: a second scale every time) */
-    lsm_real L = aim0 / a;
-    if (bq > LSM_R(0.0) && bq * L * L > aim0)
-        L = lsm_sqrt(aim0 / bq);
+    lsm_real L;
+    if (bq > LSM_R(0.0)) {
+        const lsm_real disc = a * a + LSM_R(4.0) * bq * aim0;
+        L = LSM_R(2.0) * aim0 / (a + lsm_sqrt(disc)); /* stable root of b L^2 + a L - aim0 = 0 */
+    } else {
+        L = aim0 / a;
+    }
     const lsm_real rg = ratio > LSM_R(1.0) ? ratio : LSM_R(1.0);
     const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
     if (L * rg > dm)

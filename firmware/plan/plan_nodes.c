@@ -5,11 +5,12 @@
 /* The distance probes (continuous ramps, cheap): bisected to a quarter of SPEED_RES, at most PROBE_ITER steps. */
 #define PROBE_ITER 40
 #define PROBE_RES_SHARE LSM_R(0.25)
-/* Tests of a node's W at most: the cap, the guesses with their closing tests, then the bisection (W_BISECT). */
-#define W_TESTS (W_BISECT + 2)
-/* Steps below a guess that failed (ws_guess), at most, and their size (share of SPEED_RES: the bracket then closes). */
-#define W_DESCENT 3
+/* Steps below the guesses that failed (ws_guess), at most, all guesses together (2.4 % of the speed), and their size
+ * (share of SPEED_RES: the bracket then closes). */
+#define W_DESCENT 6
 #define W_STEP LSM_R(0.98)
+/* Tests of a node's W at most: the cap, the guesses with their closing tests and the steps below, the bisection. */
+#define W_TESTS (W_BISECT + W_DESCENT + 2)
 /* A lowered override: the stopping distance from the current speed is estimated with OVR_LIMIT_SHARE of the
  * block's limits at rest (a conservative ramp), scaled by OVR_NEED_SCALE, plus OVR_NEED_CYCLES cycles of travel;
  * the switch moves further out (doubling) at most OVR_TRIES times, then to the blocks appended later. */
@@ -98,7 +99,7 @@ typedef struct wsearch {
     bool exact;
     lsm_real lo, hi;
     int tests;
-    uint32_t cost; /* ramp verifications of the last test */
+    int descents; /* steps below failed guesses left */
 } wsearch;
 
 /* Tests v if it lies inside the bracket (and the test budget is not spent); true if it passed. */
@@ -109,9 +110,7 @@ static bool ws_try(wsearch *s, lsm_real v)
     s->tests++;
     ramp r;
     lsm_real xs;
-    const uint32_t c0 = s->pc.pl->stats.checks;
     const bool ok = lsm_pl_w_test(&s->pc, v, s->w1, s->exact, &r, &xs);
-    s->cost = s->pc.pl->stats.checks - c0;
     if (ok)
         s->lo = v;
     else
@@ -124,11 +123,10 @@ static bool ws_open(const wsearch *s)
     return s->hi - s->lo > SPEED_RES * s->hi && s->tests < W_TESTS;
 }
 
-/* A guess g of W and the tests that close the bracket next to it: one just above it when it passes; when it fails
- * for want of room (told before any verification, so cheaply), steps just under SPEED_RES below it while they fail
- * that way, at most W_DESCENT (W is then within SPEED_RES of the first that passes: as close as the bisection gets,
- * in two or three tests instead of five or more). A failure that took verifications (the budgets, not the room)
- * leaves the rest to the bisection. */
+/* A guess g of W and the tests that close the bracket next to it: one just above it when it passes; when it fails,
+ * steps just under SPEED_RES below it, W_DESCENT at most for all guesses (W is then within SPEED_RES of the first that passes: as
+ * close as the bisection gets, in two to four tests instead of five or more: a guess fails mostly for want of room,
+ * told before any verification, or just above the speed the budgets allow). Further below, the bisection. */
 static void ws_guess(wsearch *s, lsm_real g)
 {
     if (!ws_open(s) || !(g > s->lo && g < s->hi))
@@ -137,9 +135,11 @@ static void ws_guess(wsearch *s, lsm_real g)
         (void)ws_try(s, g * (R1 + W_STEP * SPEED_RES));
         return;
     }
-    for (int k = 0; k < W_DESCENT && ws_open(s) && s->cost == 0u; k++)
+    while (s->descents > 0 && ws_open(s)) {
+        s->descents--;
         if (ws_try(s, s->hi * (R1 - W_STEP * SPEED_RES)))
             return;
+    }
 }
 
 /* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact), to SPEED_RES:
@@ -159,7 +159,7 @@ static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w
     s.w1 = w1;
     s.exact = exact;
     s.tests = 0;
-    s.cost = 0;
+    s.descents = W_DESCENT;
     const lsm_real c0 = cap_of(pl, id);
     const lsm_real D = s.pc.D;
     const lsm_real mincap = lsm_pl_range_cap(&s.pc, R0, D);

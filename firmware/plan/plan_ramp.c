@@ -26,7 +26,7 @@
 #define TUNE_UPS 2
 /* A ramp moved off a block that caps it moves at least this much (relative): progress of the placement loops. */
 #define MOVE_NUDGE LSM_R(1e-6)
-/* The vector bounds of a curved block (frame_of) are used with this share of the smallest limit: they are computed
+/* The vector bounds of a clothoid (plane_limits) are used with this share of the smallest limit: they are computed
  * in lsm_real from the geometry (not rounded up like the coefficients), so this covers their rounding. */
 #define VEC_LIMIT_SHARE (R1 - LSM_R(64.0) * LSM_REAL_EPS)
 /* Tangential limits of a block whose axes do not bound them (no motion along any limited axis): very large. */

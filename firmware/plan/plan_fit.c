@@ -336,12 +336,28 @@ static lsm_status add_fit_point(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES
     return LSM_OK;
 }
 
+/*
+ * May a new run start here? Not right after a block that no fitted arc may follow (a programmed arc: a fitted arc
+ * needs a line or a fitted arc in its plane before it, arc_fits_tail). Such a run could only become a fitted line,
+ * and holding its first point moved that segment's corner and backward pass into the next append: an arc after it
+ * then did two appends' work in one call (the emitted segment and the arc, two corners and two backward passes; the
+ * worst append of the M4 dense benchmark, docs/cortex_m.md). Appended at once, the segment also lets the points
+ * after it be fitted with arcs (they follow a line).
+ */
+static bool run_may_start(const lsm_planner *pl)
+{
+    if (pl->fit_n > 0 || pl->tail == pl->head || pl->tail_arc)
+        return true;
+    return blk(pl, pl->tail - 1u)->g.kind == LSM_GEOM_LINE;
+}
+
 /* A line that may join the pending polyline run. */
 lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real end[LSM_MAX_AXES],
                                   const lsm_planner_move *mv)
 {
     const bool eligible = pl->cfg.fit_share > R0 && !mv->rapid && mv->tol_mm > R0 && !g->rotary_only &&
-                          g->u.line.dir[3] == R0 && g->u.line.dir[4] == R0 && g->u.line.dir[5] == R0;
+                          g->u.line.dir[3] == R0 && g->u.line.dir[4] == R0 && g->u.line.dir[5] == R0 &&
+                          run_may_start(pl);
     lsm_status st;
     if (!eligible || (pl->fit_n > 0 && (mv->feed_mm_s != pl->fit_feed || mv->tol_mm != pl->fit_tol))) {
         st = lsm_pl_emit_run(pl, pl->fit_n);
@@ -349,9 +365,7 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
             return st;
     }
     if (!eligible) {
-        if (lsm_planner_free(pl) < 3)
-            return LSM_E_FULL;
-        st = lsm_pl_append_geom(pl, g, mv, end, NULL);
+        st = lsm_pl_push_or_hold(pl, g, mv, end);
         if (st == LSM_OK)
             pl->stats.appended++;
         return st;

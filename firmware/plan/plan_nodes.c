@@ -5,6 +5,12 @@
 /* The distance probes (continuous ramps, cheap): bisected to a quarter of SPEED_RES, at most PROBE_ITER steps. */
 #define PROBE_ITER 40
 #define PROBE_RES_SHARE LSM_R(0.25)
+/* Steps below the guesses that failed (ws_guess), at most, all guesses together (2.4 % of the speed), and their size
+ * (share of SPEED_RES: the bracket then closes). */
+#define W_DESCENT 6
+#define W_STEP LSM_R(0.98)
+/* Tests of a node's W at most: the cap, the guesses with their closing tests and the steps below, the bisection. */
+#define W_TESTS (W_BISECT + W_DESCENT + 2)
 /* A lowered override: the stopping distance from the current speed is estimated with OVR_LIMIT_SHARE of the
  * block's limits at rest (a conservative ramp), scaled by OVR_NEED_SCALE, plus OVR_NEED_CYCLES cycles of travel;
  * the switch moves further out (doubling) at most OVR_TRIES times, then to the blocks appended later. */
@@ -85,42 +91,100 @@ bool lsm_pl_w_test(pctx *pc, lsm_real v, lsm_real w1, bool exact, ramp *r, lsm_r
     return v <= w1 ? lsm_pl_region_ok(pc, R0, pc->D, v) : lsm_pl_fit_decel(pc, R0, pc->D, v, w1, exact, true, r, xs);
 }
 
-/* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact): a bisection
- * between the speed that can cruise through the piece (or 0 before an exact stop) and c0. Feasibility is not
- * strictly monotone in the speed near the caps (whole-cycle ramps against budgets that vanish at the cap), so a W
- * may move either way when w1 changes: the interpolator's commitment is checked after every append
+/* The search of a node's W: [lo, hi] with lo certified (it passed the test, or a cruise at it goes through, or 0
+ * before an exact stop) and hi failed (or the cap). */
+typedef struct wsearch {
+    pctx pc;
+    lsm_real w1;
+    bool exact;
+    lsm_real lo, hi;
+    int tests;
+    int descents; /* steps below failed guesses left */
+} wsearch;
+
+/* Tests v if it lies inside the bracket (and the test budget is not spent); true if it passed. */
+static bool ws_try(wsearch *s, lsm_real v)
+{
+    if (!(v > s->lo && v < s->hi) || s->tests >= W_TESTS)
+        return false;
+    s->tests++;
+    ramp r;
+    lsm_real xs;
+    const bool ok = lsm_pl_w_test(&s->pc, v, s->w1, s->exact, &r, &xs);
+    if (ok)
+        s->lo = v;
+    else
+        s->hi = v;
+    return ok;
+}
+
+static bool ws_open(const wsearch *s)
+{
+    return s->hi - s->lo > SPEED_RES * s->hi && s->tests < W_TESTS;
+}
+
+/* A guess g of W and the tests that close the bracket next to it: one just above it when it passes; when it fails,
+ * steps just under SPEED_RES below it, W_DESCENT at most for all guesses (W is then within SPEED_RES of the first that passes: as
+ * close as the bisection gets, in two to four tests instead of five or more: a guess fails mostly for want of room,
+ * told before any verification, or just above the speed the budgets allow). Further below, the bisection. */
+static void ws_guess(wsearch *s, lsm_real g)
+{
+    if (!ws_open(s) || !(g > s->lo && g < s->hi))
+        return;
+    if (ws_try(s, g)) {
+        (void)ws_try(s, g * (R1 + W_STEP * SPEED_RES));
+        return;
+    }
+    while (s->descents > 0 && ws_open(s)) {
+        s->descents--;
+        if (ws_try(s, s->hi * (R1 - W_STEP * SPEED_RES)))
+            return;
+    }
+}
+
+/* W of a node: highest v0 <= c0 from which the piece [0, D] reaches w1 at its end (exactly if exact), to SPEED_RES:
+ * between the speed that can cruise through the piece (or 0 before an exact stop) and c0. The guesses first, each
+ * with its closing test (ws_guess): the node's previous W (an append mostly leaves it where it was: the search then
+ * ends on it, and the backward pass stops there), before an exact stop the lowest cap of the piece (a stop close
+ * behind a slower block: W sits just below that cap), and the speed from which one continuous ramp with the budgets
+ * at the node's end fits in D (the whole-cycle, verified ramp needs at least that room); then bisection. Feasibility
+ * is not strictly monotone in the speed near the caps (whole-cycle ramps against budgets that vanish at the cap), so
+ * a W may move either way when w1 changes: the interpolator's commitment is checked after every append
  * (commitment_kept). */
 static lsm_real node_w(lsm_planner *pl, uint32_t id, uint32_t id_end, lsm_real w1, bool exact)
 {
     pl->stats.bp_nodes++;
-    pctx pc;
-    lsm_pl_pctx_init(&pc, pl, id, R0, id_end);
+    wsearch s;
+    lsm_pl_pctx_init(&s.pc, pl, id, R0, id_end);
+    s.w1 = w1;
+    s.exact = exact;
+    s.tests = 0;
+    s.descents = W_DESCENT;
     const lsm_real c0 = cap_of(pl, id);
-    const lsm_real D = pc.D;
-    const lsm_real mincap = lsm_pl_range_cap(&pc, R0, D);
-    lsm_real lo = lsm_min2(mincap, w1); /* cruising at lo through the piece always works */
-    if (exact)
-        lo = R0;
-    lsm_real hi = c0;
-    if (!(hi > lo))
-        return hi;
-    ramp r;
-    lsm_real xs;
-    if (lsm_pl_w_test(&pc, hi, w1, exact, &r, &xs))
-        return hi;
-    /* first probe: the speed from which one continuous ramp with the budgets at the node's end fits in D (the
-     * whole-cycle, verified ramp needs at least that room); then bisection to SPEED_RES */
-    lsm_real ga, gj, gs;
-    lsm_pl_guess_limits(&pc, D, &ga, &gj, &gs);
-    lsm_real probe = lsm_pl_speed_for_dist(lsm_max2(w1, lo), D, ga, gj, gs, hi);
-    for (int it = 0; it < W_BISECT && hi - lo > SPEED_RES * hi; it++) {
-        const lsm_real mid = probe_mid(lo, hi, &probe);
-        if (lsm_pl_w_test(&pc, mid, w1, exact, &r, &xs))
-            lo = mid;
-        else
-            hi = mid;
+    const lsm_real D = s.pc.D;
+    const lsm_real mincap = lsm_pl_range_cap(&s.pc, R0, D);
+    s.lo = exact ? R0 : lsm_min2(mincap, w1); /* cruising at lo through the piece always works */
+    s.hi = c0;
+    if (!(s.hi > s.lo))
+        return s.hi;
+    {
+        ramp r;
+        lsm_real xs;
+        s.tests++;
+        if (lsm_pl_w_test(&s.pc, s.hi, w1, exact, &r, &xs))
+            return s.hi;
     }
-    return lo;
+    const lsm_pblock *b = blk(pl, id);
+    if (b->flags & LSM_PB_NODE)
+        ws_guess(&s, b->w_mm_s);
+    if (exact)
+        ws_guess(&s, mincap);
+    lsm_real ga, gj, gs;
+    lsm_pl_guess_limits(&s.pc, D, &ga, &gj, &gs);
+    ws_guess(&s, lsm_pl_speed_for_dist(lsm_max2(w1, s.lo), D, ga, gj, gs, s.hi));
+    while (ws_open(&s))
+        (void)ws_try(&s, (s.lo + s.hi) / LSM_R(2.0));
+    return s.lo;
 }
 
 /* The test of node_w for speed v at node id: one verified ramp from v reaches w1 by the next node id_end (exactly

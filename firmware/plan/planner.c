@@ -108,14 +108,21 @@ static uint32_t live_head(const lsm_planner *pl)
     return id_lt(r, pl->tail) ? r : pl->tail;
 }
 
+/* Slots a held block will take (planner.c, "one block per append"). */
+#define HELD_SLOTS 3u
+
 uint32_t lsm_planner_free(const lsm_planner *pl)
 {
-    return pl ? pl->cap - (pl->tail - live_head(pl)) : 0;
+    if (pl == NULL)
+        return 0;
+    const uint32_t f = pl->cap - (pl->tail - live_head(pl));
+    const uint32_t h = pl->held ? HELD_SLOTS : 0u;
+    return f > h ? f - h : 0u;
 }
 
 uint32_t lsm_planner_count(const lsm_planner *pl)
 {
-    return pl ? pl->tail - live_head(pl) : 0;
+    return pl ? pl->tail - live_head(pl) + (pl->held ? 1u : 0u) : 0;
 }
 
 const lsm_pblock *lsm_planner_block(const lsm_planner *pl, uint32_t id)
@@ -130,6 +137,50 @@ lsm_real lsm_planner_block_cap(const lsm_planner *pl, uint32_t id)
     if (lsm_planner_block(pl, id) == NULL)
         return R0;
     return cap_of(pl, id);
+}
+
+/* ------------------------------------------------------------------------------------------------------------ */
+/* one block per append                                                                                         */
+
+/*
+ * A block costs its corner smoothing and a backward pass when it is pushed (tens of thousands of instructions on the
+ * M4 each). An append that first emits the pending polyline run, or completes the block the call before held, has
+ * pushed one already: its own block is held (its slots reserved: lsm_planner_free, lsm_planner_count count it) and
+ * pushed at the start of the next planner call (an append, flush or finish), so that no append pays for two. (An
+ * arc after a G1 that was held for fitting did both in one call: the worst append of the M4 dense benchmark,
+ * docs/cortex_m.md.) The plan the interpolator sees ends before the held block until then, exactly as with the G1
+ * points held for fitting: a paused stream calls lsm_planner_flush.
+ */
+static void call_begin(lsm_planner *pl)
+{
+    pl->call_tail = pl->tail;
+}
+
+static lsm_status push_held(lsm_planner *pl)
+{
+    if (!pl->held)
+        return LSM_OK;
+    pl->held = 0; /* (its slots count free again for the push) */
+    lsm_status st = lsm_planner_free(pl) < HELD_SLOTS ? LSM_E_FULL : LSM_OK;
+    if (st == LSM_OK)
+        st = lsm_pl_append_geom(pl, &pl->held_g, &pl->held_mv, pl->held_end, NULL);
+    if (st != LSM_OK)
+        pl->held = 1;
+    return st;
+}
+
+lsm_status lsm_pl_push_or_hold(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6])
+{
+    if (lsm_planner_free(pl) < HELD_SLOTS)
+        return LSM_E_FULL;
+    if (pl->tail == pl->call_tail)
+        return lsm_pl_append_geom(pl, g, mv, prog_end, NULL);
+    pl->held_g = *g;
+    pl->held_mv = *mv;
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        pl->held_end[i] = prog_end[i];
+    pl->held = 1;
+    return LSM_OK;
 }
 
 /* ------------------------------------------------------------------------------------------------------------ */
@@ -178,6 +229,10 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
     for (int i = 0; i < LSM_MAX_AXES; i++)
         if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
             return LSM_E_PL_AXIS;
+    call_begin(pl);
+    st = push_held(pl); /* (the block the call before held: it was checked then) */
+    if (st != LSM_OK)
+        return st;
     /* the line starts at the last point held for fitting, or at the end of the last block */
     lsm_real from[LSM_MAX_AXES];
     for (int i = 0; i < LSM_MAX_AXES; i++)
@@ -206,12 +261,16 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
         st = lsm_pl_check_vals(centre, 3);
     if (st != LSM_OK)
         return st;
-    lsm_real pe[LSM_MAX_AXES];
-    for (int i = 0; i < LSM_MAX_AXES; i++)
-        pe[i] = i < 3 ? end[i] : pl->tail_pos[i];
     for (int i = 0; i < 3; i++)
         if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
             return LSM_E_PL_AXIS;
+    call_begin(pl);
+    st = push_held(pl); /* (the block the call before held: it was checked then) */
+    if (st != LSM_OK)
+        return st;
+    lsm_real pe[LSM_MAX_AXES];
+    for (int i = 0; i < LSM_MAX_AXES; i++)
+        pe[i] = i < 3 ? end[i] : pl->tail_pos[i];
     /* an arc ends a pending polyline run: emit it first (the arc starts at its last point) */
     if (pl->fit_n > 0 && lsm_planner_free(pl) < lsm_pl_run_slots(pl) + 3u)
         return LSM_E_FULL;
@@ -234,9 +293,7 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
     st = lsm_pl_emit_run(pl, pl->fit_n);
     if (st != LSM_OK)
         return st;
-    if (lsm_planner_free(pl) < 3)
-        return LSM_E_FULL;
-    st = lsm_pl_append_geom(pl, &g, mv, pe, NULL);
+    st = lsm_pl_push_or_hold(pl, &g, mv, pe);
     if (st == LSM_OK)
         pl->stats.appended++;
     return st;
@@ -247,7 +304,9 @@ lsm_status lsm_planner_flush(lsm_planner *pl)
     if (pl == NULL)
         return LSM_E_NULL;
     lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
-    return lsm_pl_emit_run(pl, pl->fit_n);
+    call_begin(pl);
+    const lsm_status st = push_held(pl);
+    return st != LSM_OK ? st : lsm_pl_emit_run(pl, pl->fit_n);
 }
 
 /* The program ends exactly on its programmed end: a fitted arc or line that ends off it (kept in the previous arc's
@@ -287,7 +346,10 @@ lsm_status lsm_planner_finish(lsm_planner *pl)
     lsm_planner_apply_requests(pl); /* the tick's requests first (planner.h) */
     if (pl->finished)
         return LSM_OK;
-    lsm_status st = lsm_pl_emit_run_exact(pl);
+    call_begin(pl);
+    lsm_status st = push_held(pl);
+    if (st == LSM_OK)
+        st = lsm_pl_emit_run_exact(pl);
     if (st == LSM_OK)
         st = end_exactly(pl);
     if (st != LSM_OK)
@@ -326,10 +388,14 @@ bool lsm_pl_commitment_kept(lsm_planner *pl)
     /* The test depends on the blocks from e to the node after it and on that node's W. A backward pass that stopped
      * at or after that node (bp_stop: everything before it unchanged) changed none of it, unless the stretch runs
      * to the end of the buffer (a trim, or new blocks behind it). Else verified afresh, not read from the node's
-     * W: valleys move when blocks are appended (a node can vanish, or the one after it change). */
+     * W: valleys move when blocks are appended (a node can vanish, or the one after it change).
+     * That holds for a new commitment too (commit_dirty, a piece taken since the last check): the interpolator
+     * takes a piece only on the planner generation it was planned on (interp.h; every append changes it), so no
+     * backward pass ran between its planning, which verified its arrival at e, and this one. (Verifying every new
+     * commitment afresh cost an arrival test per piece, 1-3 ramp verifications, in the append after it.) */
     lsm_real w2;
     const uint32_t n2 = lsm_pl_node_after(pl, e, &w2);
-    if (n2 != pl->tail && !id_lt(pl->bp_stop, n2) && !pl->commit_dirty)
+    if (n2 != pl->tail && !id_lt(pl->bp_stop, n2))
         return true;
     const bool ok = lsm_pl_arrival_ok(pl, e, pl->horizon_end_v);
     if (ok)

@@ -95,7 +95,11 @@
  * modified (its end trimmed), and only beyond the interpolator's commitment horizon.
  * Dense G1 polylines are first fitted with arcs (arcfit.h) within fit_share of the tolerance where the per-vertex
  * transitions would limit the feed; those points wait in the planner until their run ends (or flush / finish).
- * Append validates its input first and changes nothing on error: no accepted block is ever lost.
+ * An append pushes one block with its corner smoothing and backward pass: a block whose append already pushed one
+ * (the run it emitted, or the block the call before held) is held, its slots reserved, until the next planner call
+ * (or flush / finish) pushes it first.
+ * Append validates its input first and changes nothing on error (except that the block the call before held may
+ * have been pushed, as any call does first): no accepted block is ever lost.
  *
  * Dense G1 points are fitted with arcs only where the arc's evaluation error (about R eps of lsm_real) stays far
  * below the tolerance (float builds: radius up to ~40 mm at a 0.01 mm fit tolerance; larger radii are lines).
@@ -268,6 +272,14 @@ typedef struct lsm_planner {
     uint8_t fit_slots;      /* slots the pending run takes when it is emitted (reserved as it grows) */
     uint8_t tail_switch;    /* see tail_n */
     lsm_arcfit_chain chain; /* the plane of the current chain of fitted arcs, measured (arcfit.h) */
+    /* one block, with its corner and backward pass, per append: a block whose append already pushed one (a pending
+       run it emitted, or the block held by the call before) is held for the next planner call (planner.c) */
+    lsm_geom held_g;
+    lsm_planner_move held_mv;
+    lsm_real held_end[LSM_MAX_AXES];
+    uint8_t held; /* held_g is held (its 3 slots are not counted free) */
+    uint8_t reserved4[3];
+    uint32_t call_tail; /* the tail when the current planner call began */
     lsm_planner_stats stats;
 } lsm_planner;
 
@@ -287,9 +299,10 @@ lsm_status lsm_planner_init(lsm_planner *pl, const lsm_planner_config *cfg, lsm_
 
 /*
  * Append a straight line from the end of the last block to `end` (LSM_MAX_AXES values).
- * Errors (nothing is changed): LSM_E_NULL, LSM_E_NAN, LSM_E_INF (end, feed or tolerance not finite),
- * LSM_E_NEG_FEED (feed <= 0 and not rapid), LSM_E_TOLERANCE (tol < 0), LSM_E_PL_AXIS (an axis outside the mask
- * moves), LSM_E_ZERO_LENGTH, LSM_E_RANGE, LSM_E_FULL (fewer than 3 free slots), LSM_E_PL_FINISHED.
+ * Errors (nothing is changed but the push of a held block, see above): LSM_E_NULL, LSM_E_NAN, LSM_E_INF (end, feed
+ * or tolerance not finite), LSM_E_NEG_FEED (feed <= 0 and not rapid), LSM_E_TOLERANCE (tol < 0), LSM_E_PL_AXIS (an
+ * axis outside the mask moves), LSM_E_ZERO_LENGTH, LSM_E_RANGE, LSM_E_FULL (fewer than 3 free slots),
+ * LSM_E_PL_FINISHED.
  * Background.
  */
 lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES], const lsm_planner_move *mv);
@@ -307,13 +320,14 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
  * and call again). Background. */
 lsm_status lsm_planner_finish(lsm_planner *pl);
 
-/* Emits the G1 points held for fitting (a caller that pauses its stream calls this so that the machine does not
- * stop short of them). Errors: LSM_E_NULL, LSM_E_FULL. Background. */
+/* Emits the G1 points held for fitting and the block held for the next call (a caller that pauses its stream calls
+ * this so that the machine does not stop short of them). Errors: LSM_E_NULL, LSM_E_FULL. Background. */
 lsm_status lsm_planner_flush(lsm_planner *pl);
 
-/* Free block slots (an append needs up to 3), counting the release the tick posted. Background. */
+/* Free block slots (an append needs up to 3), counting the release the tick posted and without the slots of a
+ * block held for the next call. Background. */
 uint32_t lsm_planner_free(const lsm_planner *pl);
-/* Blocks held, counting the release the tick posted. Background. */
+/* Blocks held (a block held for the next call included), counting the release the tick posted. Background. */
 uint32_t lsm_planner_count(const lsm_planner *pl);
 /* Block by id (NULL outside [head, tail), head counting the posted release). Background; the tick reads the
  * blocks of its piece (interp.c), which the background does not change before the horizon. */

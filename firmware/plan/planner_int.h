@@ -214,6 +214,9 @@ uint32_t lsm_pl_run_slots(const lsm_planner *pl);
 /* A line that may join the pending polyline run. */
 lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real end[LSM_MAX_AXES],
                                   const lsm_planner_move *mv);
+/* Appends g (lsm_pl_append_geom), or holds it for the next planner call when this call already pushed a block
+ * (planner.c, "one block per append"). */
+lsm_status lsm_pl_push_or_hold(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6]);
 /* Does the interpolator's current piece still end where it may go on? */
 bool lsm_pl_commitment_kept(lsm_planner *pl);
 

@@ -14,6 +14,17 @@
 #else
 #define PATH_DS(ip, ds) (ds)
 #endif
+/* The cursor's exact offset is off_mm + off_lo_mm (float: a compensated sum); the evaluation uses both, so the
+ * setpoints carry the rounding of the coordinates, not ulp(off_mm)/2 of the offset along the path (ulp(off) is
+ * up to 16 ulp of the coordinates on an arc of three turns). The anchor's offset a_off is a float (exact), and
+ * off_mm - a_off is exact (Sterbenz) within the anchor's range. */
+#if LSM_REAL_IS_FLOAT
+#define CURSOR_TERM(d, ip) ((d) * (ip)->off_mm + (d) * (ip)->off_lo_mm)
+#define ARC_DS(ip) (((ip)->off_mm - (ip)->a_off) + (ip)->off_lo_mm)
+#else
+#define CURSOR_TERM(d, ip) ((d) * (ip)->off_mm)
+#define ARC_DS(ip) ((ip)->off_mm - (ip)->a_off)
+#endif
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
@@ -75,6 +86,42 @@ static void block_end(const lsm_interp *ip, uint32_t id, lsm_real e[3])
     }
 }
 
+#if LSM_REAL_IS_FLOAT
+/* a b = *hi + *lo exactly (Dekker's product with Veltkamp's split; + - * only, so the Cortex-M4F gives the same bits) */
+static void two_prod(lsm_real a, lsm_real b, lsm_real *hi, lsm_real *lo)
+{
+    const lsm_real k = LSM_R(4097.0); /* 2^12 + 1: splits a float's 24 bits into 12 + 12 */
+    const lsm_real ca = k * a, cb = k * b;
+    const lsm_real ah = ca - (ca - a), al = a - ah, bh = cb - (cb - b), bl = b - bh;
+    *hi = a * b;
+    *lo = ((ah * bh - *hi) + ah * bl + al * bh) + al * bl;
+}
+
+/* The float arc at offset s along the curve the cycle evaluates (phase rate aw = sweep / len): its point p (the
+ * chord from the start, geom.h) and, in (cp, sp), the unit vector's cos and sin of phi0 + aw s. The angle aw s is
+ * carried as an exact sum hi + lo and added to phi0 by rotating (cos phi0, sin phi0): no rounding of the angle to
+ * ulp(phi0 + aw s), which is 1e-6 rad at 16 rad, r 1e-6 of position (10 ulp of the coordinates seen on R 100
+ * arcs at every re-anchoring). The angle's error is then a few ulp of 1 rad, whatever the sweep. */
+static void arc_point(const lsm_interp *ip, const lsm_geom *g, lsm_real s, lsm_real p[3], lsm_real *cp, lsm_real *sp)
+{
+    const lsm_geom_arc *a = &g->u.arc;
+    lsm_real dh, dl, s0, c0, sh, ch;
+    two_prod(ip->aw, s, &dh, &dl);
+    lsm_sincos(a->phi0_rad, &s0, &c0);
+    lsm_sincos(LSM_R(0.5) * dh, &sh, &ch); /* the half angle (exact halving) ... */
+    const lsm_real hl = LSM_R(0.5) * dl;    /* ... and its low part, to first order (hl^2 < 1e-12) */
+    const lsm_real shc = sh + ch * hl, chc = ch - sh * hl;
+    const lsm_real cm = c0 * chc - s0 * shc, sm = s0 * chc + c0 * shc; /* phi0 + half the angle */
+    const lsm_real k = LSM_R(2.0) * a->radius_mm * shc, ax = a->axial_mm * (s / g->len);
+    lsm_real n[3];
+    lsm_cross3(a->e1, a->e2, n);
+    for (int i = 0; i < 3; i++)
+        p[i] = a->start_mm[i] + k * (cm * a->e2[i] - sm * a->e1[i]) + n[i] * ax;
+    *cp = cm * chc - sm * shc;
+    *sp = sm * chc + cm * shc;
+}
+#endif
+
 /* Sets the float arc anchor at the cursor (interp.h); the end correction is computed afresh on a block's entry and
  * when its length changed (a trim), else kept from the previous anchor. */
 static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
@@ -83,9 +130,15 @@ static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
     lsm_real n[3];
     lsm_cross3(a->e1, a->e2, n);
     lsm_real c[3];
+    ip->aw = a->sweep_rad / g->len;
     if (ip->anchor == 0u || g->len != ip->a_len) {
         lsm_real pe[LSM_MAX_AXES], e[3];
+#if LSM_REAL_IS_FLOAT
+        lsm_real ce, se;
+        arc_point(ip, g, g->len, pe, &ce, &se);
+#else
         (void)lsm_geom_eval(g, g->len, pe, NULL, NULL);
+#endif
         block_end(ip, ip->blk, e);
         for (int i = 0; i < 3; i++)
             c[i] = (e[i] - pe[i]) / g->len;
@@ -93,14 +146,17 @@ static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
         for (int i = 0; i < 3; i++)
             c[i] = ip->a_L[i] - n[i] * (a->axial_mm / g->len);
     }
-    ip->aw = a->sweep_rad / g->len;
     ip->anchor = 0;
     ip->a_len = g->len;
     ip->a_off = ip->off_mm;
     lsm_real p[LSM_MAX_AXES];
-    (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
     lsm_real sp, cp;
+#if LSM_REAL_IS_FLOAT
+    arc_point(ip, g, ip->a_off, p, &cp, &sp);
+#else
+    (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
     lsm_sincos(a->phi0_rad + ip->aw * ip->a_off, &sp, &cp);
+#endif
     for (int i = 0; i < 3; i++) {
         const lsm_real corr = c[i];
         ip->a_p[i] = p[i] + corr * ip->a_off;
@@ -140,9 +196,9 @@ static void eval_pos_in(lsm_interp *ip, const lsm_pblock *b)
     const lsm_geom *g = &b->g;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
-            ip->pos[i] = g->u.line.p0[i] + g->u.line.dir[i] * ip->off_mm;
+            ip->pos[i] = g->u.line.p0[i] + CURSOR_TERM(g->u.line.dir[i], ip);
     } else if (g->kind == LSM_GEOM_ARC) {
-        const lsm_real ds = ip->off_mm - ip->a_off;
+        const lsm_real ds = ARC_DS(ip);
         lsm_real sn, cm1;
         sincos_m1_small(ip->aw * ds, &sn, &cm1);
         for (int i = 0; i < 3; i++)
@@ -264,7 +320,10 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     }
 #endif
     ip->tau = R0;
+    ip->tau0 = R0;
+    ip->tau_n = 0;
     ip->sloc = R0;
+    ip->sloc_lo = R0;
     ip->rc = R1;
     ip->rs = R0;
     /* per ramp: the offset of the samples to its phase starts, and the rotation step */
@@ -367,7 +426,7 @@ static void boundary_point(const lsm_interp *ip, uint8_t b, swpt *w)
         return;
     }
     const lsm_real d = CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc);
-    ahead(ip, d > R0 ? d : R0, &w->blk, &w->off);
+    ahead(ip, d > R0 ? PATH_DS(ip, d) : R0, &w->blk, &w->off);
     w->v = CUR(ip).st[b].v_mm_s;
 }
 
@@ -383,7 +442,7 @@ static void replace_point(const lsm_interp *ip, swpt *w)
         if (fits) {
             w->kind = LSM_INTERP_SW_SAMPLE;
             w->cycle = ip->cycles + 1u + L;
-            ahead(ip, CUR(ip).st[p].v_mm_s * (lsm_real)L * dt, &w->blk, &w->off);
+            ahead(ip, PATH_DS(ip, CUR(ip).st[p].v_mm_s * (lsm_real)L * dt), &w->blk, &w->off);
             w->v = ip->v_mm_s;
             return;
         }
@@ -598,6 +657,42 @@ static lsm_real phase_travel(lsm_interp *ip, uint8_t p, lsm_real tau, bool enter
     return st->v_mm_s * tau + st->a_mm_s2 * tau * tau / LSM_R(2.0) + jk * f;
 }
 
+/* The phase clock advanced by dt_adv. Float: a whole cycle counts, tau = tau0 + n dt, so tau is one rounding off
+ * its exact value at every sample; tau += dt drifted by up to ulp(tau)/2 per cycle, a velocity error of up to
+ * ulp(tau) / (2 dt) relative (1e-4 at tau 2 s, dt 2 ms: a cruise at the axis limit went 0.1 mm/s over it), which
+ * snapped back at the phase's end. Any other advance (the rest of a cycle) restarts the count there. */
+static lsm_real phase_clock(lsm_interp *ip, lsm_real dt_adv)
+{
+#if LSM_REAL_IS_FLOAT
+    const lsm_real dt = ip->pl->cfg.cycle_s;
+    if (dt_adv == dt && ip->tau_n < UINT32_MAX) {
+        ip->tau_n++;
+        return ip->tau0 + (lsm_real)ip->tau_n * dt;
+    }
+    ip->tau0 = ip->tau + dt_adv;
+    ip->tau_n = 0;
+    return ip->tau0;
+#else
+    return ip->tau + dt_adv;
+#endif
+}
+
+#if LSM_REAL_IS_FLOAT
+/* One whole cycle in cruise phase p: the travel v dt, the same float every cycle, added to sloc with a compensated
+ * sum. v tau - sloc (the sin² phases' form) rounds to ulp(v tau) at every sample: on a cruise longer than the
+ * coordinates (an arc's cruise of 285 mm at coordinates of 73 mm) that was 3-4 ulp of the coordinates of noise in
+ * every setpoint. Now the cursor moves by exactly fl(v dt) per cycle (a velocity error of ulp(v dt)/2, 6e-8 relative),
+ * and the phase's end takes up what that drifted, at most ulp/2 of the phase's length. */
+static lsm_real cruise_step(lsm_interp *ip, uint8_t p)
+{
+    const lsm_real vdt = CUR(ip).st[p].v_mm_s * ip->pl->cfg.cycle_s;
+    const lsm_real y = vdt + ip->sloc_lo, t = ip->sloc + y, yy = t - ip->sloc;
+    ip->sloc_lo = (ip->sloc - (t - yy)) + (y - yy); /* TwoSum: exact whichever is larger */
+    ip->sloc = t;
+    return vdt;
+}
+#endif
+
 /*
  * Advances the piece clock by dt_adv; returns the distance travelled (ds >= 0 modulo rounding) and whether the
  * piece ended (then *left is the time beyond its end), or stopped at a boundary where a new piece starts
@@ -607,14 +702,17 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
 {
     lsm_real ds = R0;
     uint8_t p = ip->phase;
-    lsm_real tau = ip->tau + dt_adv;
+    lsm_real tau = phase_clock(ip, dt_adv);
     bool entered = false;
     *ended = false;
     *brk = false;
     while (p < LSM_PIECE_PHASES && tau >= CUR(ip).ph[p].T_s) {
-        ds += CUR(ip).ph[p].len_mm - ip->sloc;
+        ds += (CUR(ip).ph[p].len_mm - ip->sloc) - ip->sloc_lo;
         tau -= CUR(ip).ph[p].T_s;
+        ip->tau0 = tau; /* the count restarts at the first sample of the phase entered */
+        ip->tau_n = 0;
         ip->sloc = R0;
+        ip->sloc_lo = R0;
         p++;
         entered = true;
         if (p == 1u || p == 9u) {
@@ -622,11 +720,13 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
              * lsm_planner_set_horizon) */
             const int e = p == 1u ? 8 : 16;
             ip->hz_v = CUR(ip).st[e].v_mm_s;
-            ahead(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
+            ahead(ip, PATH_DS(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds), &ip->hz_blk, &ip->hz_off);
         }
         if (p < LSM_PIECE_PHASES && stop_at_boundary(ip, p)) {
             ip->phase = p;
             ip->tau = R0;
+            ip->tau0 = R0;
+            ip->tau_n = 0;
             *brk = true;
             *left = tau;
             return ds;
@@ -637,12 +737,23 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
         *ended = true;
         *left = tau;
         ip->tau = R0;
+        ip->tau0 = R0;
+        ip->tau_n = 0;
         return ds;
     }
     lsm_real v;
+#if LSM_REAL_IS_FLOAT
+    if (!entered && ip->tau_n > 0u && is_cruise(p)) {
+        ds += cruise_step(ip, p);
+        ip->tau = tau;
+        ip->v_mm_s = CUR(ip).st[p].v_mm_s;
+        return ds;
+    }
+#endif
     const lsm_real s = phase_travel(ip, p, tau, entered, &v);
     ds += s - ip->sloc;
     ip->sloc = s;
+    ip->sloc_lo = R0;
     ip->tau = tau;
     ip->v_mm_s = v;
     return ds;

@@ -129,7 +129,11 @@ typedef struct lsm_interp {
     uint16_t anchor;       /* cycles since the arc was re-anchored */
     uint32_t gen;          /* planner generation of pc */
     lsm_real tau;          /* time into the current phase at the last sample */
+    lsm_real tau0;         /* float: tau = tau0 + tau_n dt (one rounding per sample, no drift; tau0 the phase-local
+                              time of the sample the count started at) */
+    uint32_t tau_n;
     lsm_real sloc;         /* travel into the current phase at the last sample */
+    lsm_real sloc_lo;      /* float: what the additions to sloc rounded off (a cruise advances by v dt, compensated) */
     lsm_real rc, rs;       /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
     lsm_real ce[2], se[2]; /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
     lsm_real ee[2];        /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */

@@ -34,6 +34,7 @@
 #include "planner.h"
 
 #define FZ_AXES 3
+#include "fz_measure.h"
 #define FZ_CAPACITY 24u            /* look-ahead storage: small, so that the ring wraps and runs low */
 #define FZ_MAX_EST_S 30.0          /* inputs whose time bound is longer are skipped (not interesting, slow) */
 #define FZ_MAX_EST_CYCLES 150000.0 /* ... and so are those with more cycles than this */
@@ -141,12 +142,14 @@ typedef struct fz_run {
     long idle_cycles; /* cycles at rest by request (HELD) or for want of blocks (IDLE): not counted as crawl */
     lsm_interp_state state;
     int limit_reported;
+    fz_meas ms; /* FZ_MEASURE: the float noise measurement (fz_measure.h) */
 } fz_run;
 
 static void fz_run_init(fz_run *r, const fz_machine *m)
 {
     memset(r, 0, sizeof *r);
     r->m = m;
+    r->ms.on = -1;
     lsm_planner_config cfg;
     fz_config(m, &cfg);
     const lsm_real start[LSM_MAX_AXES] = {0};
@@ -207,6 +210,7 @@ static lsm_interp_state fz_step(fz_run *r)
     if (r->state == LSM_INTERP_HELD || r->state == LSM_INTERP_IDLE)
         r->idle_cycles++;
     fz_check_diffs(r);
+    fz_measure_step(&r->ms, &r->ip, &r->pl, r->q, r->span, r->m->cycle_s, r->m->v, r->m->a, r->m->j);
     return r->state;
 }
 
@@ -244,6 +248,7 @@ static void fz_run_out(fz_run *r, double est_s, const lsm_real end[FZ_AXES])
                      (double)end[a], r->q[0][a] - (double)end[a]);
             break;
         }
+    fz_measure_report(&r->ms, r->m->name, r->span);
     if (getenv("FZ_VERBOSE"))
         fprintf(stderr, "fuzz: machine %s, %ld cycles (%ld at rest), end %g %g %g, bound %.3f s\n", r->m->name,
                 r->cycles, r->idle_cycles, r->q[0][0], r->q[0][1], r->q[0][2], bound_s);

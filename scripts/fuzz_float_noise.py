@@ -6,7 +6,7 @@ Usage: scripts/fuzz_float_noise.py [--bin build/bin/fuzz_planner_float_replay] [
   PATH: input files or directories. Prints, for every input: its outcome (pass, limit, crawl, end, fatal), the
   largest excess over the axis limits per difference order in units of 2^n u (u = FLT_EPSILON x the largest
   |coordinate|, so an excess of K means a setpoint noise of K u explains it), the largest position error against
-  the exact curve of the float plan (geom, in u) and the drift of the phase clock as travel (tau, in u); then the
+  the exact curve of the float plan at the cursor (geom, in u) and of the cursor along the path against the piece's travel at the exact time (travel, in u); then the
   histograms. Exit 0 (a measurement, not a test).
 """
 import argparse
@@ -84,14 +84,18 @@ def main():
     for n in (1, 2, 3):
         hist(f"  order {n}", [r.get(f"ex{n}", 0) for r in rows])
     hist("position error against the exact curve (lines, arcs; u)", [r.get("geom", 0) for r in rows])
-    hist("phase clock drift as travel (u)", [r.get("tau", 0) for r in rows])
+    hist("travel error along the path against the exact time (u)", [r.get("travel", 0) for r in rows])
+    hist("K_eff: the setpoint error's own n-th difference / 2^n (max over n; u)",
+         [max(r.get("keff1", 0), r.get("keff2", 0), r.get("keff3", 0)) for r in rows])
+    for n in (1, 2, 3):
+        hist(f"  order {n}", [r.get(f"keff{n}", 0) for r in rows])
     print(f"worst {a.worst} by excess:")
     for r in sorted(rows, key=lambda r: -r["ex"])[: a.worst]:
         print(f"  {r['file'][:18]} {r['outcome']:6} ex {r['ex']:9.3g} geom {r.get('geom', 0):7.3g} "
-              f"tau {r.get('tau', 0):8.3g} span {r.get('span', 0):7.4g} {r.get('msg', '')[:110]}")
+              f"travel {r.get('travel', 0):6.3g} keff {max(r.get('keff1', 0), r.get('keff2', 0), r.get('keff3', 0)):6.3g} span {r.get('span', 0):7.4g} {r.get('msg', '')[:110]}")
     if a.csv:
         keys = ["file", "outcome", "machine", "span", "ex1", "ex2", "ex3", "ratio1", "ratio2", "ratio3", "geom",
-                "geom_kind", "tau", "msg"]
+                "geom_kind", "travel", "keff1", "keff2", "keff3", "msg"]
         with open(a.csv, "w") as fo:
             fo.write(",".join(keys) + "\n")
             for r in rows:

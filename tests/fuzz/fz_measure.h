@@ -9,8 +9,15 @@
  *            to float, the phase rate the interpolator runs the arc at, and the end correction it applies,
  *            interp.h), both evaluated in double from the float parameters; s = off_mm + off_lo_mm in double.
  *            Clothoids are not measured;
- *   tau      the largest |tau - tau*| v / u: the drift of the float phase clock tau against the exact time since
- *            the phase's first sample (tau* = tau there + k dt), as travel along the path.
+ *   travel   the largest |s - s*| / u along the path: s the cursor's distance from the piece's start (off_mm +
+ *            off_lo_mm, over the blocks between), s* = ds_scale x the piece's travel at the exact time of the sample,
+ *            evaluated in double from the float piece (the closed forms of interp.h, with sin). The time is the
+ *            piece's clock at its first sample (sum of the phases before + tau, then small) plus k dt exactly.
+ * The position error against the exact curve at the exact time is at most geom + travel (a unit tangent).
+ *   keff     per order n, the largest |D_n e| / (2^n u), e = q - q*(t) the setpoint's error against the exact curve
+ *            (lines, arcs) at the exact travel of the sample's time: the share of the setpoint noise in the n-th
+ *            difference, as the K of a noise of K u (|D_n e| <= 2^n max|e|). A smooth drift of e (a float time
+ *            scale, an arc's phase rate rounded) adds nothing here, unlike in geom and travel.
  * Test-only (reads the interpolator's and planner's state); nothing in the double build.
  */
 #ifndef FZ_MEASURE_H
@@ -20,6 +27,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "interp.h"
 #include "planner.h"
@@ -32,11 +40,13 @@ typedef struct fz_meas {
     int ex_axis[3];
     double geom;
     int geom_kind;
-    double tau_err;
+    double travel;
+    double e[4][3];  /* q - q* of the last samples (e[0] the newest) */
+    int ne;          /* how many consecutive samples have e */
+    double keff[3];  /* the largest |D_n e| / (2^n u): the noise's own share of the n-th difference, in u */
     uint32_t serial;
-    uint8_t phase;
     int running;
-    double tau_exact;
+    double t_piece; /* the piece's clock at the last sample (exact: the first sample's + k dt) */
     long cycles;
 } fz_meas;
 
@@ -67,6 +77,68 @@ static void fz_meas_arc(const lsm_geom *g, double s, double p[3])
     const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
     for (int i = 0; i < 3; i++)
         p[i] = (double)a->start_mm[i] + k * (cm * e2[i] - sm * e1[i]) + n[i] * (double)a->axial_mm * s / len;
+}
+#endif
+
+#if LSM_REAL_IS_FLOAT
+/* The exact curve of block id at offset s (lines and arcs, as for geom above); 0 for a clothoid or a released block. */
+static int fz_meas_exact_pos(const lsm_planner *pl, uint32_t id, double s, double p[3])
+{
+    const lsm_pblock *b = lsm_planner_block(pl, id);
+    if (b == NULL)
+        return 0;
+    if (b->g.kind == LSM_GEOM_LINE) {
+        for (int i = 0; i < 3; i++)
+            p[i] = (double)b->g.u.line.p0[i] + (double)b->g.u.line.dir[i] * s;
+        return 1;
+    }
+    if (b->g.kind != LSM_GEOM_ARC)
+        return 0;
+    double pe[3], e[3];
+    const double len = (double)b->g.len;
+    fz_meas_arc(&b->g, len, pe);
+    fz_meas_exact_end(pl, id, e);
+    fz_meas_arc(&b->g, s, p);
+    for (int i = 0; i < 3; i++)
+        p[i] += (e[i] - pe[i]) * s / len;
+    return 1;
+}
+
+/* The travel of piece pc at time t into its phase k (the closed forms of interp.h, in double). */
+static double fz_meas_travel(const lsm_piece *pc, int k, double t)
+{
+    const lsm_piece_phase *ph = &pc->ph[k];
+    const double v0 = pc->st[k].v_mm_s, a0 = pc->st[k].a_mm_s2, T = ph->T_s, J = ph->jerk_mm_s3;
+    double s = (double)pc->st[k].s_mm + v0 * t;
+    if (k == 0 || k == 8 || k == 16)
+        return s;
+    double f = t * t * t / 6;
+    if (ph->shape != LSM_PHASE_CONST) {
+        const double sg = ph->shape == LSM_PHASE_RISE ? 1 : -1, pi = 3.14159265358979323846;
+        f = t * t * t / 12 - sg * t * T * T / (2 * pi * pi) + sg * sin(pi * t / T) * T * T * T / (2 * pi * pi * pi);
+    }
+    return s + a0 * t * t / 2 + J * f;
+}
+#endif
+
+#if LSM_REAL_IS_FLOAT
+/* Shifts the error history (e[0] the newest, just written when have) and takes the differences of the error. */
+static void fz_meas_noise(fz_meas *ms, int have, double u)
+{
+    ms->ne = have ? ms->ne + 1 : 0;
+    if (ms->ne >= 4) {
+        for (int i = 0; i < 3; i++) {
+            const double *e0 = &ms->e[0][i];
+            const double d[3] = {fabs(e0[0] - e0[3]), fabs(e0[0] - 2 * e0[3] + e0[6]),
+                                 fabs(e0[0] - 3 * e0[3] + 3 * e0[6] - e0[9])};
+            for (int n = 0; n < 3; n++) {
+                const double k = d[n] / (ldexp(1.0, n + 1) * u);
+                if (k > ms->keff[n])
+                    ms->keff[n] = k;
+            }
+        }
+    }
+    memmove(&ms->e[1], &ms->e[0], 3 * sizeof ms->e[0]);
 }
 #endif
 
@@ -138,22 +210,9 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
     }
     /* the geometry at the cursor */
     const lsm_pblock *b = lsm_planner_block(pl, ip->blk);
+    double p[3];
     if (b != NULL && ip->act_ok && ip->act_blk == ip->blk &&
-        (b->g.kind == LSM_GEOM_LINE || b->g.kind == LSM_GEOM_ARC)) {
-        const double s = (double)ip->off_mm + (double)ip->off_lo_mm;
-        double p[3];
-        if (b->g.kind == LSM_GEOM_LINE) {
-            for (int i = 0; i < 3; i++)
-                p[i] = (double)b->g.u.line.p0[i] + (double)b->g.u.line.dir[i] * s;
-        } else {
-            double pe[3], e[3];
-            const double len = (double)b->g.len;
-            fz_meas_arc(&b->g, len, pe);
-            fz_meas_exact_end(pl, ip->blk, e);
-            fz_meas_arc(&b->g, s, p);
-            for (int i = 0; i < 3; i++)
-                p[i] += (e[i] - pe[i]) * s / len;
-        }
+        fz_meas_exact_pos(pl, ip->blk, (double)ip->off_mm + (double)ip->off_lo_mm, p)) {
         for (int i = 0; i < 3; i++) {
             const double err = fabs((double)ip->pos[i] - p[i]) / u;
             if (err > ms->geom) {
@@ -162,19 +221,59 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
             }
         }
     }
-    /* the phase clock */
-    if (ip->running) {
-        if (ms->running && ms->serial == ip->serial && ms->phase == ip->phase)
-            ms->tau_exact += dt;
-        else
-            ms->tau_exact = (double)ip->tau;
-        const double err = fabs((double)ip->tau - ms->tau_exact) * fabs((double)ip->v_mm_s) / u;
-        if (err > ms->tau_err)
-            ms->tau_err = err;
+    /* the travel along the piece */
+    if (ip->running && ip->phase < LSM_PIECE_PHASES) {
+        const lsm_piece *pc = &ip->pcs[ip->cur];
+        if (ms->running && ms->serial == ip->serial) {
+            ms->t_piece += (double)(lsm_real)dt; /* the float build's cycle (its rounding is a time scale, not noise) */
+        } else {
+            ms->t_piece = (double)ip->tau;
+            for (int k = 0; k < ip->phase; k++)
+                ms->t_piece += (double)pc->ph[k].T_s;
+        }
+        double t = ms->t_piece, sx = 0;
+        int k = 0;
+        while (k < LSM_PIECE_PHASES - 1 && t > (double)pc->ph[k].T_s) {
+            t -= (double)pc->ph[k].T_s;
+            k++;
+        }
+        sx = fz_meas_travel(pc, k, t);
+        double sc = 0; /* the cursor from the piece's start */
+        int ok = 1;
+        for (uint32_t id = pc->blk; id != ip->blk && ok; id++) {
+            const lsm_pblock *bb = lsm_planner_block(pl, id);
+            ok = bb != NULL && id - pc->blk < 64u;
+            if (ok)
+                sc += (double)bb->g.len;
+        }
+        sc += (double)ip->off_mm + (double)ip->off_lo_mm - (double)pc->off_mm;
+        int have = 0;
+        if (ok) {
+            const double sx_path = (double)ip->ds_scale * sx;
+            const double err = fabs(sc - sx_path) / u;
+            if (err > ms->travel)
+                ms->travel = err;
+            /* the exact curve at the exact time: the block and offset sx_path from the piece's start */
+            double o = (double)pc->off_mm + sx_path;
+            uint32_t id = pc->blk;
+            const lsm_pblock *bb = lsm_planner_block(pl, id);
+            while (bb != NULL && o > (double)bb->g.len && id + 1u != pl->tail && id - pc->blk < 64u) {
+                o -= (double)bb->g.len;
+                bb = lsm_planner_block(pl, ++id);
+            }
+            double qx[3];
+            if (bb != NULL && fz_meas_exact_pos(pl, id, o, qx)) {
+                have = 1;
+                for (int i = 0; i < 3; i++)
+                    ms->e[0][i] = q[0][i] - qx[i];
+            }
+        }
+        fz_meas_noise(ms, have, u);
+    } else {
+        fz_meas_noise(ms, 0, u);
     }
     ms->running = ip->running;
     ms->serial = ip->serial;
-    ms->phase = ip->phase;
 #else
     (void)ip;
     (void)pl;
@@ -193,9 +292,10 @@ static void fz_measure_report(const fz_meas *ms, const char *machine, double spa
         return;
     fprintf(stderr,
             "FZ_MEASURE machine %s span %.6g ex1 %.3g ex2 %.3g ex3 %.3g ratio1 %.6g ratio2 %.6g ratio3 %.6g "
-            "ex3_cycle %ld ex3_axis %d geom %.3g geom_kind %d tau %.3g\n",
+            "ex3_cycle %ld ex3_axis %d geom %.3g geom_kind %d travel %.3g keff1 %.3g keff2 %.3g keff3 %.3g\n",
             machine, span, ms->excess[0], ms->excess[1], ms->excess[2], ms->ratio[0], ms->ratio[1], ms->ratio[2],
-            ms->ex_cycle[2], ms->ex_axis[2], ms->geom, ms->geom_kind, ms->tau_err);
+            ms->ex_cycle[2], ms->ex_axis[2], ms->geom, ms->geom_kind, ms->travel, ms->keff[0], ms->keff[1],
+            ms->keff[2]);
 }
 
 #endif

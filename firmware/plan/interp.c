@@ -678,18 +678,38 @@ static lsm_real phase_clock(lsm_interp *ip, lsm_real dt_adv)
 }
 
 #if LSM_REAL_IS_FLOAT
-/* One whole cycle in cruise phase p: the travel v dt, the same float every cycle, added to sloc with a compensated
- * sum. v tau - sloc (the sin² phases' form) rounds to ulp(v tau) at every sample: on a cruise longer than the
- * coordinates (an arc's cruise of 285 mm at coordinates of 73 mm) that was 3-4 ulp of the coordinates of noise in
- * every setpoint. Now the cursor moves by exactly fl(v dt) per cycle (a velocity error of ulp(v dt)/2, 6e-8 relative),
- * and the phase's end takes up what that drifted, at most ulp/2 of the phase's length. */
-static lsm_real cruise_step(lsm_interp *ip, uint8_t p)
+/* One whole cycle in phase p, from the last sample (tau = tp) to tk = tp + dt: the travel s(tk) - s(tp) of
+ * phase_travel's closed forms, written as dt times the mean rate over the cycle (tk^2 - tp^2 = dt (tk + tp),
+ * tk^3 - tp^3 = dt (tk^2 + tk tp + tp^2)) plus, in a sin² phase, J sg T³/(2 pi³) times the step of the rotation's
+ * sine. s(tk) - sloc rounded both to ulp(s) of the phase's travel, and tau's rounding moved s by v ulp(tau): on a
+ * phase longer than the coordinates (a 285 mm cruise on an arc at coordinates of 73 mm, a 28 mm ramp phase at
+ * 17 mm) 3-5 ulp of the coordinates of noise in every setpoint. Here the error is a few ulp of ds itself, and the
+ * cursor sums exactly; sloc is summed compensated, so the phase's end takes up only what the steps' own rounding
+ * drifted (a few ulp of ds per cycle, mostly cancelling). Updates the rotation and writes the velocity at tk. */
+static lsm_real phase_step(lsm_interp *ip, uint8_t p, lsm_real tk, lsm_real *v)
 {
-    const lsm_real vdt = CUR(ip).st[p].v_mm_s * ip->pl->cfg.cycle_s;
-    const lsm_real y = vdt + ip->sloc_lo, t = ip->sloc + y, yy = t - ip->sloc;
+    const lsm_piece_phase *ph = &CUR(ip).ph[p];
+    const lsm_kin *st = &CUR(ip).st[p];
+    const lsm_real dt = ip->pl->cfg.cycle_s, tp = ip->tau, rs0 = ip->rs;
+    (void)phase_travel(ip, p, tk, false, v); /* the velocity, and the rotation advanced to tk */
+    lsm_real ds;
+    if (is_cruise(p)) {
+        ds = st->v_mm_s * dt;
+    } else {
+        const lsm_real q = tk * tk + tk * tp + tp * tp, jk = ph->jerk_mm_s3;
+        const lsm_real rate = st->v_mm_s + st->a_mm_s2 * (LSM_R(0.5) * (tk + tp));
+        if (ph->shape == LSM_PHASE_CONST) {
+            ds = dt * (rate + jk * (q / LSM_R(6.0)));
+        } else {
+            const lsm_real T = ph->T_s, k8 = T * T / (LSM_R(2.0) * PI_R * PI_R), k16 = k8 * T / PI_R;
+            const lsm_real sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+            ds = dt * (rate + jk * (q / LSM_R(12.0) - sg * k8)) + jk * sg * k16 * (ip->rs - rs0);
+        }
+    }
+    const lsm_real y = ds + ip->sloc_lo, t = ip->sloc + y, yy = t - ip->sloc;
     ip->sloc_lo = (ip->sloc - (t - yy)) + (y - yy); /* TwoSum: exact whichever is larger */
     ip->sloc = t;
-    return vdt;
+    return ds;
 }
 #endif
 
@@ -743,10 +763,10 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
     }
     lsm_real v;
 #if LSM_REAL_IS_FLOAT
-    if (!entered && ip->tau_n > 0u && is_cruise(p)) {
-        ds += cruise_step(ip, p);
+    if (!entered && ip->tau_n > 0u) {
+        ds += phase_step(ip, p, tau, &v);
         ip->tau = tau;
-        ip->v_mm_s = CUR(ip).st[p].v_mm_s;
+        ip->v_mm_s = v;
         return ds;
     }
 #endif

@@ -20,7 +20,7 @@
  *   So at most about 2.5 (lines) and 3.5 (arcs); K = 4 holds them with half an ulp to spare.
  * Measurement (scripts/fuzz_float_noise.py over the 479 fuzz_planner_float inputs of the 1 h run, FZ_MEASURE in
  *   tests/fuzz/fz_measure.h): the error's own differences |D_n e| / 2^n u (e = q - q* at the exact time, lines and
- *   arcs): at most 2.42 (n = 1), 1.72 (n = 2), 1.44 (n = 3); |q - q*(cursor)| at most 3.9; and over every input,
+ *   arcs): at most 2.42 (n = 1), 1.72 (n = 2), 1.44 (n = 3); |q - q*(cursor)| at most 3.07; and over every input,
  *   clothoids included, the largest excess of |D_n q| over L_n dt^n is 1.66 x 2^n u. Before the fixes of
  *   interp.c (a phase clock summed per cycle, the travel v tau - sloc rounded to ulp of the phase's travel, the
  *   arc's angle rounded to ulp(phi), the cursor's low part left out) the same inputs needed up to 16 u.

@@ -10,9 +10,11 @@
 #define R1 LSM_R(1.0)
 #define ARC_ANCHOR_CYCLES 256u
 #if LSM_REAL_IS_FLOAT
-#define PATH_DS(ip, ds) ((ds) * (ip)->ds_scale) /* interp.h: the piece's phases scaled to its length */
+#define PATH_DS(ip, ds) ((ds) + (ds) * (ip)->ds_stretch) /* interp.h: the piece's phases scaled to its length */
+#define PATH_LO(ip, ds) ((ds) * (ip)->ds_stretch) /* the cursor adds it to its low part: no rounding of ds (1 + e) */
 #else
 #define PATH_DS(ip, ds) (ds)
+#define PATH_LO(ip, ds) R0
 #endif
 /* The cursor's exact offset is off_mm + off_lo_mm (float: a compensated sum); the evaluation uses both, so the
  * setpoints carry the rounding of the coordinates, not ulp(off_mm)/2 of the offset along the path (ulp(off) is
@@ -25,6 +27,11 @@
 #define CURSOR_TERM(d, ip) ((d) * (ip)->off_mm)
 #define ARC_DS(ip) ((ip)->off_mm - (ip)->a_off)
 #endif
+/* Float: phases that add up to less than their piece by at most this (relative) are stretched to it, like those that
+ * add up to more are shrunk: the rounding of 17 float phase lengths, a few ulp, left the cursor short of the end by
+ * up to 2e-4 mm on a 640 mm helix, a setpoint jump where end_piece put it on the end. 2^-20: 8 ulp, and within the
+ * planner's 1e-6 relative margin on v, a and j (a larger shortfall is not rounding: it stays visible). */
+#define DS_STRETCH_MAX LSM_R(9.5367431640625e-7)
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
@@ -218,11 +225,14 @@ static void eval_pos(lsm_interp *ip)
         eval_pos_in(ip, b);
 }
 
-/* Moves the cursor by ds (>= 0) and evaluates the position there. */
-static void advance_path(lsm_interp *ip, lsm_real ds)
+/* Moves the cursor by ds (>= 0) plus ds_lo (a small correction, float: the piece's stretch) and evaluates the position
+ * there. */
+static void advance_path(lsm_interp *ip, lsm_real ds, lsm_real ds_lo)
 {
-    if (!(ds > R0))
+    if (!(ds > R0)) {
         ds = R0;
+        ds_lo = R0;
+    }
     const lsm_planner *pl = ip->pl;
     const lsm_pblock *b = bk(ip, ip->blk);
     if (b == NULL)
@@ -231,11 +241,12 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         activate(ip); /* (re)started on a block that was never set up */
 #if LSM_REAL_IS_FLOAT
     {
-        const lsm_real y = ds + ip->off_lo_mm, t = ip->off_mm + y;
+        const lsm_real y = ds + (ip->off_lo_mm + ds_lo), t = ip->off_mm + y;
         ip->off_lo_mm = y - (t - ip->off_mm); /* exact when |off| >= |y| (Fast2Sum), and when off is 0 */
         ip->off_mm = t;
     }
 #else
+    (void)ds_lo;
     ip->off_mm += ds;
 #endif
     bool moved = false;
@@ -316,7 +327,9 @@ static void start_piece(lsm_interp *ip, lsm_real first)
 #if LSM_REAL_IS_FLOAT
     {
         const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm;
-        ip->ds_scale = sum > pc->len_mm && pc->len_mm > R0 ? pc->len_mm / sum : R1;
+        const lsm_real d = pc->len_mm - sum; /* exact (Sterbenz): they differ by 1e-5 at most */
+        const bool fits = d < R0 || d <= DS_STRETCH_MAX * sum;
+        ip->ds_stretch = pc->len_mm > R0 && sum > R0 && fits ? d / sum : R0;
     }
 #endif
     ip->tau = R0;
@@ -863,14 +876,14 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
-                advance_path(ip, PATH_DS(ip, ds));
+                advance_path(ip, ds, PATH_LO(ip, ds));
                 ip->gen = ip->pl->gen; /* once per boundary: the current piece stays valid if none was found */
             }
             adv = left;
             continue;
         }
         if (!ended) {
-            advance_path(ip, PATH_DS(ip, ds));
+            advance_path(ip, ds, PATH_LO(ip, ds));
             post_horizon(ip);
             return;
         }
@@ -908,7 +921,7 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl)
     ip->blk = pl->head;
     ip->off_mm = R0;
     ip->ovr = R1;
-    ip->ds_scale = R1;
+    ip->ds_stretch = R0;
     for (int i = 0; i < LSM_MAX_AXES; i++)
         ip->pos[i] = pl->tail_pos[i];
     if (pl->tail != pl->head) {

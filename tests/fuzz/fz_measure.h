@@ -10,7 +10,7 @@
  *            interp.h), both evaluated in double from the float parameters; s = off_mm + off_lo_mm in double.
  *            Clothoids are not measured;
  *   travel   the largest |s - s*| / u along the path: s the cursor's distance from the piece's start (off_mm +
- *            off_lo_mm, over the blocks between), s* = ds_scale x the piece's travel at the exact time of the sample,
+ *            off_lo_mm, over the blocks between), s* = (1 + ds_stretch) x the piece's travel at the exact time of the sample,
  *            evaluated in double from the float piece (the closed forms of interp.h, with sin). The time is the
  *            piece's clock at its first sample (sum of the phases before + tau, then small) plus k dt exactly.
  * The position error against the exact curve at the exact time is at most geom + travel (a unit tangent).
@@ -167,7 +167,7 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
                     (unsigned)pc->blk, (double)pc->off_mm, (double)pc->len_mm,
                     (double)pc->st[LSM_PIECE_PHASES - 1].s_mm + (double)pc->ph[LSM_PIECE_PHASES - 1].len_mm,
                     (double)pc->v0_mm_s, (double)pc->v1_mm_s, (unsigned)pc->end_blk, (unsigned)pc->stop,
-                    (double)ip->ds_scale);
+                    1.0 + (double)ip->ds_stretch);
             for (int ph = 0; ph < LSM_PIECE_PHASES; ph++) {
                 const double T = pc->ph[ph].T_s, v0 = pc->st[ph].v_mm_s, a0 = pc->st[ph].a_mm_s2;
                 double J = pc->ph[ph].jerk_mm_s3;
@@ -249,7 +249,7 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
         sc += (double)ip->off_mm + (double)ip->off_lo_mm - (double)pc->off_mm;
         int have = 0;
         if (ok) {
-            const double sx_path = (double)ip->ds_scale * sx;
+            const double sx_path = (1.0 + (double)ip->ds_stretch) * sx;
             const double err = fabs(sc - sx_path) / u;
             if (err > ms->travel)
                 ms->travel = err;

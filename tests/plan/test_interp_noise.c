@@ -105,6 +105,11 @@ static bool run_step(run *r)
                       r->cycles, r->q[0][0], r->q[0][1], r->q[0][2], (unsigned)r->ip.blk, b ? b->g.kind : -1,
                       b ? (double)b->g.len : 0.0, (double)r->ip.off_mm, (double)r->ip.off_lo_mm,
                       (unsigned)r->ip.phase, (double)r->ip.tau, (double)r->ip.v_mm_s, (unsigned)r->ip.serial);
+        const lsm_piece *pc = &r->ip.pcs[r->ip.cur];
+        print_message("  piece blk %u off %.9g len %.9g sum %.9g scale %.9g end_blk %u stop %u\n", (unsigned)pc->blk,
+                      (double)pc->off_mm, (double)pc->len_mm,
+                      (double)pc->st[LSM_PIECE_PHASES - 1].s_mm + (double)pc->ph[LSM_PIECE_PHASES - 1].len_mm,
+                      1.0 + (double)r->ip.ds_stretch, (unsigned)pc->end_blk, (unsigned)pc->stop);
     }
     const double dt = r->m->dt;
     for (int k = 0; k < 3; k++) {

@@ -701,26 +701,33 @@ static lsm_real phase_clock(lsm_interp *ip, lsm_real dt_adv)
  * drifted (a few ulp of ds per cycle, mostly cancelling). Updates the rotation and writes the velocity at tk. */
 static lsm_real phase_step(lsm_interp *ip, uint8_t p, lsm_real tk, lsm_real *v)
 {
-    const lsm_piece_phase *ph = &CUR(ip).ph[p];
     const lsm_kin *st = &CUR(ip).st[p];
-    const lsm_real dt = ip->pl->cfg.cycle_s, tp = ip->tau, rs0 = ip->rs;
-    (void)phase_travel(ip, p, tk, false, v); /* the velocity, and the rotation advanced to tk */
+    const lsm_real dt = ip->pl->cfg.cycle_s;
     lsm_real ds;
     if (is_cruise(p)) {
+        *v = st->v_mm_s;
         ds = st->v_mm_s * dt;
     } else {
-        const lsm_real q = tk * tk + tk * tp + tp * tp, jk = ph->jerk_mm_s3;
-        const lsm_real rate = st->v_mm_s + st->a_mm_s2 * (LSM_R(0.5) * (tk + tp));
+        const lsm_piece_phase *ph = &CUR(ip).ph[p];
+        const lsm_real tp = ip->tau, jk = ph->jerk_mm_s3, q = tk * tk + tk * tp + tp * tp;
+        const lsm_real rate = st->v_mm_s + st->a_mm_s2 * (LSM_R(0.5) * (tk + tp)), va = st->v_mm_s + st->a_mm_s2 * tk;
         if (ph->shape == LSM_PHASE_CONST) {
-            ds = dt * (rate + jk * (q / LSM_R(6.0)));
-        } else {
-            const lsm_real T = ph->T_s, k8 = T * T / (LSM_R(2.0) * PI_R * PI_R), k16 = k8 * T / PI_R;
-            const lsm_real sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
-            ds = dt * (rate + jk * (q / LSM_R(12.0) - sg * k8)) + jk * sg * k16 * (ip->rs - rs0);
+            *v = va + jk * (LSM_R(0.5) * tk * tk);
+            ds = dt * (rate + jk * q * (R1 / LSM_R(6.0)));
+        } else { /* the rotation one cycle on (phase_travel's recurrence), the sin² closed forms' steps */
+            const int r = p < 8u ? 0 : 1;
+            const lsm_real rs0 = ip->rs, c = ip->rc * ip->cd[r] - ip->rs * ip->sd[r];
+            ip->rs = ip->rs * ip->cd[r] + ip->rc * ip->sd[r];
+            ip->rc = c;
+            const lsm_real T = ph->T_s, k8 = T * T * (R1 / (LSM_R(2.0) * PI_R * PI_R)), k16 = k8 * T * (R1 / PI_R);
+            const lsm_real sgj = ph->shape == LSM_PHASE_RISE ? jk : -jk;
+            *v = va + jk * (LSM_R(0.25) * tk * tk) - sgj * (R1 - c) * k8;
+            ds = dt * (rate + jk * q * (R1 / LSM_R(12.0)) - sgj * k8) + sgj * k16 * (ip->rs - rs0);
         }
     }
-    const lsm_real y = ds + ip->sloc_lo, t = ip->sloc + y, yy = t - ip->sloc;
-    ip->sloc_lo = (ip->sloc - (t - yy)) + (y - yy); /* TwoSum: exact whichever is larger */
+    /* Fast2Sum: exact once sloc >= ds, i.e. after the phase's first cycle (before, the error is under ulp(ds)) */
+    const lsm_real y = ds + ip->sloc_lo, t = ip->sloc + y;
+    ip->sloc_lo = y - (t - ip->sloc);
     ip->sloc = t;
     return ds;
 }

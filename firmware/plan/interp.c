@@ -50,16 +50,13 @@ static const lsm_pblock *bk(const lsm_interp *ip, uint32_t id)
 }
 
 
-/* The travel of phase p of the current piece. Float: its closed form at tau = T (the travel the cycle's steps add
- * up to; sin(pi) = 0, cos(pi) = -1 exactly), not the planner's len_mm: the planner's lengths come from piece-relative
- * positions and carry their rounding, ulp(s) of up to the whole piece (a 6e-5 mm phase length, negative, on a 586 mm
- * helix, whose travel is 6e-6 mm), which the cursor jumped by at the phase's end. Double: len_mm (the same bits as
- * ever). */
-static lsm_real phase_len(const lsm_interp *ip, uint8_t p)
-{
 #if LSM_REAL_IS_FLOAT
-    const lsm_piece_phase *ph = &CUR(ip).ph[p];
-    const lsm_kin *st = &CUR(ip).st[p];
+/* The travel of phase p of piece pc: its closed form at tau = T (the travel the cycle's steps add up to; sin(pi) = 0,
+ * cos(pi) = -1 exactly). */
+static lsm_real phase_len(const lsm_piece *pc, uint8_t p)
+{
+    const lsm_piece_phase *ph = &pc->ph[p];
+    const lsm_kin *st = &pc->st[p];
     const lsm_real T = ph->T_s, sv = st->v_mm_s * T;
     if (p == 0u || p == 8u || p == LSM_PIECE_PHASES - 1u)
         return sv;
@@ -67,23 +64,24 @@ static lsm_real phase_len(const lsm_interp *ip, uint8_t p)
     if (ph->shape != LSM_PHASE_CONST)
         k = R1 / LSM_R(12.0) + (ph->shape == LSM_PHASE_RISE ? -R1 : R1) * (R1 / (LSM_R(2.0) * PI_R * PI_R));
     return sv + st->a_mm_s2 * T * T * LSM_R(0.5) + ph->jerk_mm_s3 * T * T * T * k;
-#else
-    return CUR(ip).ph[p].len_mm;
-#endif
 }
 
-/* The travel of the current piece from the start of phase a to the start of phase b (a <= b), by phase_len. */
-static lsm_real phases_len(const lsm_interp *ip, uint8_t a, uint8_t b)
+/* Float, when a piece is planned (plan_switch): each phase's length becomes its closed-form travel (phase_len) and
+ * each phase's start their sum, instead of the planner's: those come from piece-relative positions and carry their rounding, ulp(s) of
+ * up to the whole piece (a 6e-5 mm phase length, negative, on a 586 mm helix, whose travel is 6e-6 mm), which the
+ * cursor jumped by at the phase's end. Returns the piece's travel, the sum. (The piece buffer is the
+ * interpolator's; the planner only writes the other one.) */
+static lsm_real own_phase_lengths(lsm_piece *pc)
 {
-#if LSM_REAL_IS_FLOAT
-    lsm_real d = R0;
-    for (uint8_t p = a; p < b; p++)
-        d += phase_len(ip, p);
-    return d;
-#else
-    return CUR(ip).st[b].s_mm - CUR(ip).st[a].s_mm;
-#endif
+    lsm_real s = R0;
+    for (uint8_t p = 0; p < LSM_PIECE_PHASES; p++) {
+        pc->st[p].s_mm = s;
+        pc->ph[p].len_mm = pc->ph[p].T_s > R0 ? phase_len(pc, p) : R0;
+        s += pc->ph[p].len_mm;
+    }
+    return s;
 }
+#endif
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* geometry of the current block                                                                               */
@@ -305,7 +303,7 @@ static void advance_path(lsm_interp *ip, lsm_real ds, lsm_real ds_lo)
             b->g.len != ip->a_len)
             arc_anchor(ip, &b->g);
     } else if (ip->gkind == LSM_GEOM_CLOTHOID && ds > R0) {
-        (void)lsm_clothoid_step(&ip->cs, ds, NULL);
+        (void)lsm_clothoid_step(&ip->cs, ds + ds_lo, NULL); /* the stepper keeps its own s: the stretch is in it */
     }
     eval_pos_in(ip, b); /* b is the block at the cursor (looked up once per cycle: a lookup is a call and a division) */
 }
@@ -361,7 +359,7 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     ip->phase = 0;
 #if LSM_REAL_IS_FLOAT
     {
-        const lsm_real sum = phases_len(ip, 0u, LSM_PIECE_PHASES - 1u) + phase_len(ip, LSM_PIECE_PHASES - 1u);
+        const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm; /* (own) */
         const lsm_real d = pc->len_mm - sum; /* exact (Sterbenz): they differ by 1e-5 at most */
         const bool fits = d < R0 || d <= DS_STRETCH_MAX * sum;
         ip->ds_stretch = pc->len_mm > R0 && sum > R0 && fits ? d / sum : R0;
@@ -474,7 +472,7 @@ static void boundary_point(const lsm_interp *ip, uint8_t b, swpt *w)
         return;
     }
 #if LSM_REAL_IS_FLOAT
-    const lsm_real d = (phases_len(ip, ip->phase, b) - ip->sloc) - ip->sloc_lo;
+    const lsm_real d = (CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc)) - ip->sloc_lo;
 #else
     const lsm_real d = CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc);
 #endif
@@ -585,6 +583,10 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
         ip->plan_errors++;
         st = LSM_OK;
     }
+#if LSM_REAL_IS_FLOAT
+    if (st == LSM_OK)
+        (void)own_phase_lengths(&NXT(ip)); /* here, where the piece is planned: not in the cycle that takes it */
+#endif
     if (st == LSM_OK && NXT(ip).T_s > R0) {
         q->ready = 1;
         return LSM_OK;
@@ -786,7 +788,7 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
     *ended = false;
     *brk = false;
     while (p < LSM_PIECE_PHASES && tau >= CUR(ip).ph[p].T_s) {
-        ds += (phase_len(ip, p) - ip->sloc) - ip->sloc_lo;
+        ds += (CUR(ip).ph[p].len_mm - ip->sloc) - ip->sloc_lo;
         tau -= CUR(ip).ph[p].T_s;
         ip->tau0 = tau; /* the count restarts at the first sample of the phase entered */
         ip->tau_n = 0;
@@ -799,7 +801,7 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
              * lsm_planner_set_horizon) */
             const int e = p == 1u ? 8 : 16;
             ip->hz_v = CUR(ip).st[e].v_mm_s;
-            ahead(ip, PATH_DS(ip, phases_len(ip, p, (uint8_t)e) + ds), &ip->hz_blk, &ip->hz_off);
+            ahead(ip, PATH_DS(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds), &ip->hz_blk, &ip->hz_off);
         }
         if (p < LSM_PIECE_PHASES && stop_at_boundary(ip, p)) {
             ip->phase = p;

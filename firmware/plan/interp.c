@@ -393,10 +393,9 @@ static void start_piece(lsm_interp *ip, lsm_real first)
                 e = R0;
             ip->ee[r] = e;
             const lsm_real T1 = (lsm_real)n1 * dt;
-            ip->ce[r] = lsm_cos(PI_R * e / T1);
-            ip->se[r] = lsm_sin(PI_R * e / T1);
-            ip->cd[r] = lsm_cos(PI_R / (lsm_real)n1);
-            ip->sd[r] = lsm_sin(PI_R / (lsm_real)n1);
+            lsm_sincos(PI_R * e / T1, &ip->se[r], &ip->ce[r]); /* (the same bits as lsm_sin and lsm_cos) */
+            ip->cd[r] = ip->nx_cd[r]; /* plan_switch's, for this piece */
+            ip->sd[r] = ip->nx_sd[r];
         }
     }
 }
@@ -555,6 +554,23 @@ static bool same_switch(const lsm_interp *ip, const lsm_interp_prep *q, const sw
     }
 }
 
+/* What the cycle needs of the piece just planned into the second buffer, computed with it (the background): per ramp
+ * cos and sin of pi / n1 (start_piece), and in the float build its own phase lengths (own_phase_lengths). */
+static void piece_constants(lsm_interp *ip)
+{
+    const lsm_piece *pc = &NXT(ip);
+    for (int r = 0; r < 2; r++) {
+        const uint32_t n1 = pc->ph[r == 0 ? 1 : 9].n_cycles;
+        ip->nx_cd[r] = R1;
+        ip->nx_sd[r] = R0;
+        if (n1)
+            lsm_sincos(PI_R / (lsm_real)n1, &ip->nx_sd[r], &ip->nx_cd[r]);
+    }
+#if LSM_REAL_IS_FLOAT
+    (void)own_phase_lengths(&NXT(ip));
+#endif
+}
+
 /* Plans the piece for switch point w into the slot. */
 static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
 {
@@ -583,10 +599,8 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
         ip->plan_errors++;
         st = LSM_OK;
     }
-#if LSM_REAL_IS_FLOAT
     if (st == LSM_OK)
-        (void)own_phase_lengths(&NXT(ip)); /* here, where the piece is planned: not in the cycle that takes it */
-#endif
+        piece_constants(ip); /* here, where the piece is planned: not in the cycle that takes it */
     if (st == LSM_OK && NXT(ip).T_s > R0) {
         q->ready = 1;
         return LSM_OK;

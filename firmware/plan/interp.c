@@ -69,17 +69,21 @@ static lsm_real phase_len(const lsm_piece *pc, uint8_t p)
 /* Float, when a piece is planned (plan_switch): each phase's length becomes its closed-form travel (phase_len) and
  * each phase's start their sum, instead of the planner's: those come from piece-relative positions and carry their rounding, ulp(s) of
  * up to the whole piece (a 6e-5 mm phase length, negative, on a 586 mm helix, whose travel is 6e-6 mm), which the
- * cursor jumped by at the phase's end. Returns the piece's travel, the sum. (The piece buffer is the
+ * cursor jumped by at the phase's end. Writes the piece's travel, their sum, as hi + lo. (The piece buffer is the
  * interpolator's; the planner only writes the other one.) */
-static lsm_real own_phase_lengths(lsm_piece *pc)
+static void own_phase_lengths(lsm_piece *pc, lsm_real sum[2])
 {
-    lsm_real s = R0;
+    lsm_real s = R0, lo = R0; /* the sum, compensated (TwoSum): its rounding set the stretch off by 2 ulp of a 666 mm
+                                 piece, the cursor ending 1.3e-4 mm beyond it */
     for (uint8_t p = 0; p < LSM_PIECE_PHASES; p++) {
         pc->st[p].s_mm = s;
-        pc->ph[p].len_mm = pc->ph[p].T_s > R0 ? phase_len(pc, p) : R0;
-        s += pc->ph[p].len_mm;
+        const lsm_real x = pc->ph[p].T_s > R0 ? phase_len(pc, p) : R0, t = s + x, xx = t - s;
+        pc->ph[p].len_mm = x;
+        lo += (s - (t - xx)) + (x - xx);
+        s = t;
     }
-    return s;
+    sum[0] = s;
+    sum[1] = lo;
 }
 #endif
 
@@ -359,8 +363,8 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     ip->phase = 0;
 #if LSM_REAL_IS_FLOAT
     {
-        const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm; /* (own) */
-        const lsm_real d = pc->len_mm - sum; /* exact (Sterbenz): they differ by 1e-5 at most */
+        const lsm_real sum = ip->nx_sum[0]; /* (piece_constants: this piece's own lengths, summed exactly) */
+        const lsm_real d = (pc->len_mm - sum) - ip->nx_sum[1]; /* len - sum exact (Sterbenz: within 1e-5) */
         const bool fits = d < R0 || d <= DS_STRETCH_MAX * sum;
         ip->ds_stretch = pc->len_mm > R0 && sum > R0 && fits ? d / sum : R0;
     }
@@ -567,7 +571,7 @@ static void piece_constants(lsm_interp *ip)
             lsm_sincos(PI_R / (lsm_real)n1, &ip->nx_sd[r], &ip->nx_cd[r]);
     }
 #if LSM_REAL_IS_FLOAT
-    (void)own_phase_lengths(&NXT(ip));
+    own_phase_lengths(&NXT(ip), ip->nx_sum);
 #endif
 }
 

@@ -145,6 +145,7 @@ typedef struct lsm_interp {
     lsm_real ee[2];        /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
     lsm_real cd[2], sd[2]; /* per ramp: cos, sin of pi / n1 (one cycle) */
     lsm_real nx_cd[2], nx_sd[2]; /* the same of the piece planned ahead: computed where it is planned, not in the cycle */
+    lsm_real nx_sum[2];          /* float: the sum of that piece's phase lengths, hi + lo (exact) */
     lsm_real v_mm_s;       /* feed at the last sample */
     uint32_t act_blk;      /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
     uint8_t act_ok;

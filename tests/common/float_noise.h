@@ -15,15 +15,22 @@
  *   the setpoint's own rounding 1/2; a line p0 + dir off + dir off_lo: the product dir off (|dir off| <= 2 S) 1,
  *   the sums 1/2; an arc p_a + (cos d - 1) A + sin d B + L ds: the anchor p_a from the exact angle (two_prod and a
  *   rotation: a few ulp of 1 rad times the chord, <= 1.5), the polynomial terms (sin d B <= 0.25 r) 1/2, the sums 1;
- *   the travel: the cursor is an exact (compensated) sum of per-cycle steps ds, each a few ulp of ds, so its error
- *   is a slow drift, not noise (the phase's end takes it up: under 1/2).
+ *   the travel: the cursor is an exact (compensated) sum of per-cycle steps ds (phase_step: dt times the cycle's
+ *   mean rate, a few ulp of ds each), the phases' lengths are their own closed forms (summed exactly) and the
+ *   piece's rounding is spread over it (ds_stretch), so the travel's error is a slow drift, not noise (under 1/2
+ *   per cycle's difference).
  *   So at most about 2.5 (lines) and 3.5 (arcs); K = 4 holds them with half an ulp to spare.
  * Measurement (scripts/fuzz_float_noise.py over the 479 fuzz_planner_float inputs of the 1 h run, FZ_MEASURE in
- *   tests/fuzz/fz_measure.h): the error's own differences |D_n e| / 2^n u (e = q - q* at the exact time, lines and
- *   arcs): at most 2.42 (n = 1), 1.72 (n = 2), 1.44 (n = 3); |q - q*(cursor)| at most 3.07; and over every input,
- *   clothoids included, the largest excess of |D_n q| over L_n dt^n is 1.66 x 2^n u. Before the fixes of
- *   interp.c (a phase clock summed per cycle, the travel v tau - sloc rounded to ulp of the phase's travel, the
- *   arc's angle rounded to ulp(phi), the cursor's low part left out) the same inputs needed up to 16 u.
+ *   tests/fuzz/fz_measure.h, at 012c2c0+): the error's own differences |D_n e| / 2^n u (e = q - q* at the exact
+ *   time, lines and arcs) at most 2.67 (n = 1), 1.84 (n = 2), 1.60 (n = 3); |q - q*(cursor)| at most 3.28; and
+ *   over every input, clothoids included, the largest excess of |D_n q| over L_n dt^n is 1.49 x 2 u (n = 1),
+ *   0.80 x 4 u, 1.23 x 8 u. Before the fixes of interp.c (on 7cc6ed6: a phase clock summed per cycle, the travel
+ *   v tau - sloc rounded to ulp of the phase's travel, the arc's angle rounded to ulp(phi), the cursor's low part
+ *   left out, switch points not scaled like the travel, the planner's phase lengths (ulp of the piece) and a
+ *   piece's rounding snapped at its end) the same inputs' error differences reached 64-1000 u on two inputs and
+ *   16-64 u on 36 (K_eff), and |q - q*(cursor)| 16-64 u.
+ *   tests/plan/test_interp_noise.c checks the bound on random paths (30 000 of them pass at seeds 1, 12, 13,
+ *   20-39 x 3000; several of those failed before the last fixes).
  * The old bounds were 1 u (fz_path.h: 2, 4, 8 x 1.2e-7 S) and 4 u (pp_check.h): one bound now, 4 u.
  */
 #ifndef FLOAT_NOISE_H

@@ -104,12 +104,12 @@ static int fz_meas_exact_pos(const lsm_planner *pl, uint32_t id, double s, doubl
     return 1;
 }
 
-/* The travel of piece pc at time t into its phase k (the closed forms of interp.h, in double). */
-static double fz_meas_travel(const lsm_piece *pc, int k, double t)
+/* The travel of piece pc's phase k at time t into it (the closed forms of interp.h, in double). */
+static double fz_meas_phase(const lsm_piece *pc, int k, double t)
 {
     const lsm_piece_phase *ph = &pc->ph[k];
     const double v0 = pc->st[k].v_mm_s, a0 = pc->st[k].a_mm_s2, T = ph->T_s, J = ph->jerk_mm_s3;
-    double s = (double)pc->st[k].s_mm + v0 * t;
+    double s = v0 * t;
     if (k == 0 || k == 8 || k == 16)
         return s;
     double f = t * t * t / 6;
@@ -118,6 +118,16 @@ static double fz_meas_travel(const lsm_piece *pc, int k, double t)
         f = t * t * t / 12 - sg * t * T * T / (2 * pi * pi) + sg * sin(pi * t / T) * T * T * T / (2 * pi * pi * pi);
     }
     return s + a0 * t * t / 2 + J * f;
+}
+
+/* The travel of piece pc at time t into its phase k, from the piece's start: the phases before, each its closed form
+ * at its end (as interp.c's phase_len), and phase k's. */
+static double fz_meas_travel(const lsm_piece *pc, int k, double t)
+{
+    double s = fz_meas_phase(pc, k, t);
+    for (int q = 0; q < k; q++)
+        s += fz_meas_phase(pc, q, (double)pc->ph[q].T_s);
+    return s;
 }
 #endif
 

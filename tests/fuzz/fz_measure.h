@@ -197,7 +197,7 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
             for (uint32_t k = ip->blk > 2 ? ip->blk - 2 : 0; k <= ip->blk + 1; k++) {
                 const lsm_pblock *bb = lsm_planner_block(pl, k);
                 if (bb)
-                    fprintf(stderr, "  blk %u kind %d len %.9g\n", (unsigned)k, bb->g.kind, (double)bb->g.len);
+                    fprintf(stderr, "  blk %u kind %d len %.9g cap %.6g\n", (unsigned)k, bb->g.kind, (double)bb->g.len, (double)bb->cap_geo_mm_s);
             }
         }
     }

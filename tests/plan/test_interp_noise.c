@@ -8,14 +8,16 @@
  * Cases (issue 14 item 1: where the float build lost more than a few ulp):
  *   - multi-turn arcs at small coordinates (r 2 mm, 3 turns: 38 mm of path at coordinates of 2 mm). The travel
  *     v tau - sloc rounded to ulp of the phase's travel (16 u here) and tau summed per cycle drifted. Before the
- *     fix (7cc6ed6) the aniso case's 3rd difference was 1.19 x its allowance (limit + 8 K u / dt³), now 0.52.
+ *     fix (7cc6ed6) the aniso case's 3rd difference was 1.19 x its allowance (limit + 8 K u / dt³), now 0.47.
  *     Fixed in interp.c (phase_clock, phase_step: the travel as dt times the cycle's mean rate, summed
  *     compensated);
  *   - arcs of many radians (the anchor's angle phi0 + aw s rounded to ulp(phi), up to 19 rad: r 1e-6 of position
- *     at every re-anchoring): before, the aniso helix 1.07 x its allowance, now 0.55. Fixed in interp.c
+ *     at every re-anchoring): before, the aniso helix 1.07 x its allowance, now 0.40. Fixed in interp.c
  *     (arc_point: the angle as an exact sum, added by a rotation);
  *   - random paths: a line to a random start, then 1-3 arcs (radius 0.5 .. 60 mm, 0-2 extra turns, helix) and
- *     lines, random feeds and tolerances, on three machines (1 ms, 2 ms, 0.25 ms).
+ *     lines, random feeds and tolerances, on three machines (1 ms, 2 ms, 0.25 ms). Long helices found the end
+ *     snaps of a piece whose phases did not add up to it (the planner's phase lengths carry ulp of the position in
+ *     the piece; the stretch's sum and factor rounded): fixed in interp.c (own_phase_lengths, ds_stretch).
  * Every run must also end exactly on the programmed end and use no fallback piece.
  */
 #include <math.h>

@@ -153,7 +153,7 @@ static void arc_point(const lsm_interp *ip, const lsm_geom *g, lsm_real s, lsm_r
     two_prod(ip->aw, s, &dh, &dl);
     lsm_sincos(a->phi0_rad, &s0, &c0);
     lsm_sincos(LSM_R(0.5) * dh, &sh, &ch); /* the half angle (exact halving) ... */
-    const lsm_real hl = LSM_R(0.5) * dl;    /* ... and its low part, to first order (hl^2 < 1e-12) */
+    const lsm_real hl = LSM_R(0.5) * dl;   /* ... and its low part, to first order (hl^2 < 1e-12) */
     const lsm_real shc = sh + ch * hl, chc = ch - sh * hl;
     const lsm_real cm = c0 * chc - s0 * shc, sm = s0 * chc + c0 * shc; /* phi0 + half the angle */
     const lsm_real k = LSM_R(2.0) * a->radius_mm * shc, ax = a->axial_mm * (s / g->len);
@@ -398,7 +398,7 @@ static void start_piece(lsm_interp *ip, lsm_real first)
             ip->ee[r] = e;
             const lsm_real T1 = (lsm_real)n1 * dt;
             lsm_sincos(PI_R * e / T1, &ip->se[r], &ip->ce[r]); /* (the same bits as lsm_sin and lsm_cos) */
-            ip->cd[r] = ip->nx_cd[r]; /* plan_switch's, for this piece */
+            ip->cd[r] = ip->nx_cd[r];                          /* plan_switch's, for this piece */
             ip->sd[r] = ip->nx_sd[r];
         }
     }

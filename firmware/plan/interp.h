@@ -135,27 +135,27 @@ typedef struct lsm_interp {
     uint16_t anchor;       /* cycles since the arc was re-anchored */
     uint32_t gen;          /* planner generation of pc */
     lsm_real tau;          /* time into the current phase at the last sample */
-    lsm_real tau0;         /* float: tau = tau0 + tau_n dt (one rounding per sample, no drift; tau0 the phase-local
-                              time of the sample the count started at) */
-    uint32_t tau_n;
+    lsm_real tau0;         /* float: tau = tau0 + tau_n dt (one rounding per sample, no drift), tau0 the ... */
+    uint32_t tau_n;        /* ... phase-local time of the sample the count started at, tau_n the cycles since */
     lsm_real sloc;         /* travel into the current phase at the last sample */
     lsm_real sloc_lo;      /* float: what the additions to sloc rounded off (a cruise advances by v dt, compensated) */
     lsm_real rc, rs;       /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
     lsm_real ce[2], se[2]; /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
     lsm_real ee[2];        /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
     lsm_real cd[2], sd[2]; /* per ramp: cos, sin of pi / n1 (one cycle) */
-    lsm_real nx_cd[2], nx_sd[2]; /* the same of the piece planned ahead: computed where it is planned, not in the cycle */
-    lsm_real nx_sum[2];          /* float: the sum of that piece's phase lengths, hi + lo (exact) */
+    lsm_real nx_cd[2];     /* cd and sd of the piece planned ahead: computed where it is planned, ... */
+    lsm_real nx_sd[2];     /* ... not in the cycle that takes it */
+    lsm_real nx_sum[2];    /* float: the sum of that piece's phase lengths, hi + lo (exact) */
     lsm_real v_mm_s;       /* feed at the last sample */
     uint32_t act_blk;      /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
     uint8_t act_ok;
     uint8_t reserved[3];
-    uint32_t blk;       /* path cursor: block id ... */
-    lsm_real off_mm;    /* ... and offset in it */
+    uint32_t blk;        /* path cursor: block id ... */
+    lsm_real off_mm;     /* ... and offset in it */
     lsm_real ds_stretch; /* float: (len - sum) / sum of the piece's phases: the travel is ds (1 + ds_stretch) */
-    lsm_real off_lo_mm; /* float: what the additions to off_mm rounded off (compensated sum: the cursor
+    lsm_real off_lo_mm;  /* float: what the additions to off_mm rounded off (compensated sum: the cursor
                                     keeps the exact sum of the travel, no drift to snap back at a piece's end) */
-    uint32_t hz_blk;    /* end of the current ramp (commitment horizon) */
+    uint32_t hz_blk;     /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
     lsm_real hz_v;                           /* speed there (a = 0) */
     lsm_real aw;                             /* arc: dphi/ds */

@@ -41,9 +41,9 @@ typedef struct fz_meas {
     double geom;
     int geom_kind;
     double travel;
-    double e[4][3];  /* q - q* of the last samples (e[0] the newest) */
-    int ne;          /* how many consecutive samples have e */
-    double keff[3];  /* the largest |D_n e| / (2^n u): the noise's own share of the n-th difference, in u */
+    double e[4][3]; /* q - q* of the last samples (e[0] the newest) */
+    int ne;         /* how many consecutive samples have e */
+    double keff[3]; /* the largest |D_n e| / (2^n u): the noise's own share of the n-th difference, in u */
     uint32_t serial;
     int running;
     double t_piece; /* the piece's clock at the last sample (exact: the first sample's + k dt) */
@@ -152,8 +152,8 @@ static void fz_meas_noise(fz_meas *ms, int have, double u)
 }
 #endif
 
-static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner *pl, const double q[4][3],
-                            double span, double dt, const double *vl, const double *al, const double *jl)
+static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner *pl, const double q[4][3], double span,
+                            double dt, const double *vl, const double *al, const double *jl)
 {
     if (ms->on < 0) {
         const char *e = getenv("FZ_MEASURE");
@@ -187,17 +187,19 @@ static void fz_measure_step(fz_meas *ms, const lsm_interp *ip, const lsm_planner
                 else if (pc->ph[ph].shape == LSM_PHASE_CONST)
                     f = T * T * T / 6;
                 else
-                    f = T * T * T / 12 - (pc->ph[ph].shape == LSM_PHASE_RISE ? 1 : -1) * T * T * T / (2 * LSM_PI * LSM_PI);
+                    f = T * T * T / 12 -
+                        (pc->ph[ph].shape == LSM_PHASE_RISE ? 1 : -1) * T * T * T / (2 * LSM_PI * LSM_PI);
                 const double se = v0 * T + a0 * T * T / 2 + J * f;
                 if (T > 0)
-                    fprintf(stderr, "   ph %d T %.9g n %u len %.9g eval %.9g diff %.3g s %.9g v %.9g a %.9g j %.9g\n", ph, T,
-                            (unsigned)pc->ph[ph].n_cycles, (double)pc->ph[ph].len_mm, se, se - pc->ph[ph].len_mm,
+                    fprintf(stderr, "   ph %d T %.9g n %u len %.9g eval %.9g diff %.3g s %.9g v %.9g a %.9g j %.9g\n",
+                            ph, T, (unsigned)pc->ph[ph].n_cycles, (double)pc->ph[ph].len_mm, se, se - pc->ph[ph].len_mm,
                             (double)pc->st[ph].s_mm, v0, a0, J);
             }
             for (uint32_t k = ip->blk > 2 ? ip->blk - 2 : 0; k <= ip->blk + 1; k++) {
                 const lsm_pblock *bb = lsm_planner_block(pl, k);
                 if (bb)
-                    fprintf(stderr, "  blk %u kind %d len %.9g cap %.6g\n", (unsigned)k, bb->g.kind, (double)bb->g.len, (double)bb->cap_geo_mm_s);
+                    fprintf(stderr, "  blk %u kind %d len %.9g cap %.6g\n", (unsigned)k, bb->g.kind, (double)bb->g.len,
+                            (double)bb->cap_geo_mm_s);
             }
         }
     }

@@ -60,7 +60,7 @@ typedef struct run {
     double q[4][3];
     double span;
     long cycles;
-    double worst; /* the largest ratio of a difference to its allowance */
+    double worst;              /* the largest ratio of a difference to its allowance */
     long trace_from, trace_to; /* INTERP_NOISE_TRACE=path:c0:c1 prints these cycles of that random path */
     char msg[256];
 } run;
@@ -105,8 +105,8 @@ static bool run_step(run *r)
         const lsm_pblock *b = lsm_planner_block(&r->pl, r->ip.blk);
         print_message("T %ld q %.9g %.9g %.9g blk %u kind %d len %.9g off %.9g lo %.3g ph %u tau %.9g v %.9g ser %u\n",
                       r->cycles, r->q[0][0], r->q[0][1], r->q[0][2], (unsigned)r->ip.blk, b ? b->g.kind : -1,
-                      b ? (double)b->g.len : 0.0, (double)r->ip.off_mm, (double)r->ip.off_lo_mm,
-                      (unsigned)r->ip.phase, (double)r->ip.tau, (double)r->ip.v_mm_s, (unsigned)r->ip.serial);
+                      b ? (double)b->g.len : 0.0, (double)r->ip.off_mm, (double)r->ip.off_lo_mm, (unsigned)r->ip.phase,
+                      (double)r->ip.tau, (double)r->ip.v_mm_s, (unsigned)r->ip.serial);
         const lsm_piece *pc = &r->ip.pcs[r->ip.cur];
         print_message("  piece blk %u off %.9g len %.9g sum %.9g scale %.9g end_blk %u stop %u\n", (unsigned)pc->blk,
                       (double)pc->off_mm, (double)pc->len_mm,
@@ -126,7 +126,8 @@ static bool run_step(run *r)
                 r->worst = ratio;
             if (ratio > 1) {
                 snprintf(r->msg, sizeof r->msg,
-                         "machine %s cycle %ld axis %d: difference of order %d %.9g exceeds %.9g (limit %g + noise %.3g, "
+                         "machine %s cycle %ld axis %d: difference of order %d %.9g exceeds %.9g (limit %g + noise "
+                         "%.3g, "
                          "span %g)",
                          r->m->name, r->cycles, k, n + 1, d[n], allowed, L[n], float_noise_diff(r->span, n + 1, dt),
                          r->span);
@@ -185,8 +186,8 @@ static void check_turns(const machine *m, double r, uint32_t turns, double dz, d
     assert_int_equal(lsm_planner_append_arc(&rn.pl, end, centre, LSM_GEOM_PLANE_XY, 1, turns, &mv), LSM_OK);
     const double len = 2 * 3.141592653589793 * r * (turns + 1);
     const bool ok = run_out(&rn, end, (long)(20.0 * (len / f + 1.0) / m->dt));
-    print_message("%s r %g turns %u dz %g F %g: %ld cycles, worst %.3f of the allowance\n", m->name, r,
-                  (unsigned)turns, dz, f, rn.cycles, rn.worst);
+    print_message("%s r %g turns %u dz %g F %g: %ld cycles, worst %.3f of the allowance\n", m->name, r, (unsigned)turns,
+                  dz, f, rn.cycles, rn.worst);
     if (!ok)
         fail_msg("%s", rn.msg);
 }

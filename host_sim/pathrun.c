@@ -1119,6 +1119,33 @@ static int vp_plan_geometry(lsm_planner *pl, const lsm_planner_config *cfg, lsm_
     return 0;
 }
 
+/* Measurement only: with LISSOM_DUMP_BLOCKS=FILE in the environment, the blocks VPOp runs on (the planner's
+ * geometry) go to FILE as CSV: index, start s, length, kind, the curvature at both ends, the clothoid's sharpness,
+ * the block's geometric cap and flags (docs/planner.md, "Where the trident loses its time"). */
+static void vp_dump_blocks(const gpath *gp, const lsm_planner *pl)
+{
+    const char *fn = getenv("LISSOM_DUMP_BLOCKS");
+    FILE *f = fn ? fopen(fn, "w") : NULL;
+    if (!f)
+        return;
+    fprintf(f, "k,s0,len,kind,k0,k1,c,cap_geo,feed,flags\n");
+    for (size_t k = 0; k < gp->n; k++) {
+        const lsm_pblock *b = lsm_planner_block(pl, pl->head + (uint32_t)k);
+        const lsm_geom *g = &b->g;
+        double k0 = 0, k1 = 0, c = 0;
+        if (g->kind == LSM_GEOM_ARC)
+            k0 = k1 = 1.0 / g->u.arc.radius_mm;
+        else if (g->kind == LSM_GEOM_CLOTHOID) {
+            k0 = g->u.clo.kappa0_per_mm;
+            c = g->u.clo.c_per_mm2;
+            k1 = k0 + c * g->len;
+        }
+        fprintf(f, "%zu,%.9g,%.9g,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%u\n", k, gp->s0[k], (double)g->len, (int)g->kind, k0, k1,
+                c, (double)b->cap_geo_mm_s, (double)b->feed_mm_s, (unsigned)b->flags);
+    }
+    fclose(f);
+}
+
 /* The planner's blocks into gp: geometry, cumulative starts, A B C at each start, feeds, and the stops. */
 static int vp_gpath_fill(gpath *gp, const lsm_planner *pl, const lsm_real start[LSM_MAX_AXES])
 {
@@ -1139,6 +1166,7 @@ static int vp_gpath_fill(gpath *gp, const lsm_planner *pl, const lsm_real start[
         gp->len += b->g.len;
     }
     gp->s0[gp->n] = gp->len;
+    vp_dump_blocks(gp, pl);
     gp->stops = calloc(gp->n + 1, sizeof *gp->stops);
     if (!gp->stops)
         return -1;

@@ -43,13 +43,14 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
 
-/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES) and the curvature bounds of the block. */
+/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES), the curvature bound of the block and the bound of |q_sss| (the path's
+ * own third derivative: sqrt(c² + kappa⁴) on a clothoid, kappa |w| on a helix, kappa² on a planar arc). */
 static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q2[LSM_MAX_AXES],
-                        lsm_real q3[LSM_MAX_AXES], lsm_real *kmax, lsm_real *cmax)
+                        lsm_real q3[LSM_MAX_AXES], lsm_real *kmax, lsm_real *q3max)
 {
     for (int i = 0; i < LSM_MAX_AXES; i++)
         q1[i] = q2[i] = q3[i] = R0;
-    *kmax = *cmax = R0;
+    *kmax = *q3max = R0;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
             q1[i] = lsm_fabs(g->u.line.dir[i]);
@@ -81,7 +82,7 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
             q3[i] = k * lsm_fabs(w) * mT;
         }
         *kmax = k;
-        *cmax = R0;
+        *q3max = k * lsm_fabs(w);
         return;
     }
     /* clothoid: theta(s) = theta0 + k0 s + c s²/2; T = cos e1 + sin e2, N = -sin e1 + cos e2 */
@@ -110,7 +111,7 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         q3[i] = lsm_fabs(c) * mN + k * k * mT;
     }
     *kmax = k;
-    *cmax = lsm_fabs(c);
+    *q3max = lsm_sqrt(c * c + k * k * k * k);
     (void)sT;
 }
 
@@ -135,8 +136,8 @@ static uint16_t bf16_up(lsm_real x)
 static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 {
     const lsm_planner_config *cf = &pl->cfg;
-    lsm_real q1[LSM_MAX_AXES], q2[LSM_MAX_AXES], q3[LSM_MAX_AXES], kmax, cmax;
-    geom_bounds(&b->g, q1, q2, q3, &kmax, &cmax);
+    lsm_real q1[LSM_MAX_AXES], q2[LSM_MAX_AXES], q3[LSM_MAX_AXES], kmax, q3max;
+    geom_bounds(&b->g, q1, q2, q3, &kmax, &q3max);
     lsm_real av = R0, aa = R0, ba = R0, aj = R0, bj = R0, gj = R0, as = R0;
     for (int i = 0; i < LSM_MAX_AXES; i++) {
         if (!(cf->axis_mask & (1u << i)))
@@ -150,7 +151,7 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
         gj = lsm_max2(gj, q3[i] / x->j_max);
         as = lsm_max2(as, q1[i] / x->snap_max);
     }
-    if (!b->g.rotary_only) { /* the tangential frame: |T| = 1, |kappa N| = kappa, |q_sss| = sqrt(c² + kappa⁴) */
+    if (!b->g.rotary_only) { /* the tangential frame: |T| = 1, |kappa N| = kappa, |q_sss| <= q3max */
         if (cf->path_a_max_mm_s2 > R0) {
             aa = lsm_max2(aa, R1 / cf->path_a_max_mm_s2);
             ba = lsm_max2(ba, kmax / cf->path_a_max_mm_s2);
@@ -158,7 +159,7 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
         if (cf->path_j_max_mm_s3 > R0) {
             aj = lsm_max2(aj, R1 / cf->path_j_max_mm_s3);
             bj = lsm_max2(bj, kmax / cf->path_j_max_mm_s3);
-            gj = lsm_max2(gj, lsm_sqrt(cmax * cmax + kmax * kmax * kmax * kmax) / cf->path_j_max_mm_s3);
+            gj = lsm_max2(gj, q3max / cf->path_j_max_mm_s3);
         }
     }
     b->coef[0] = bf16_up(aa);

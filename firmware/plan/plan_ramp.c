@@ -26,6 +26,9 @@
 #define TUNE_UPS 2
 /* A ramp moved off a block that caps it moves at least this much (relative): progress of the placement loops. */
 #define MOVE_NUDGE LSM_R(1e-6)
+/* The vector bounds of a clothoid (plane_limits) are used with this share of the smallest limit: they are computed
+ * in lsm_real from the geometry (not rounded up like the coefficients), so this covers their rounding. */
+#define VEC_LIMIT_SHARE (R1 - LSM_R(64.0) * LSM_REAL_EPS)
 /* Tangential limits of a block whose axes do not bound them (no motion along any limited axis): very large. */
 #define UNBOUNDED_A LSM_R(1e12)
 #define UNBOUNDED_J LSM_R(1e15)
@@ -191,6 +194,129 @@ static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_rea
     out->s_mm = a.s_mm + a.v_mm_s * t + a.a_mm_s2 * t * t / LSM_R(2.0) + jk * u3;
 }
 
+/* The ranges of v, a and j (signed) over a sub-interval of a ramp: those of its ends (they are monotone there). */
+typedef struct kspan {
+    lsm_real vlo, vhi, alo, ahi, jlo, jhi;
+} kspan;
+
+static void kspan_of(const lsm_kin *p, const lsm_kin *q, kspan *k)
+{
+    k->vlo = lsm_min2(p->v_mm_s, q->v_mm_s);
+    k->vhi = lsm_max2(p->v_mm_s, q->v_mm_s);
+    k->alo = lsm_min2(p->a_mm_s2, q->a_mm_s2);
+    k->ahi = lsm_max2(p->a_mm_s2, q->a_mm_s2);
+    k->jlo = lsm_min2(p->j_mm_s3, q->j_mm_s3);
+    k->jhi = lsm_max2(p->j_mm_s3, q->j_mm_s3);
+}
+
+/* A planar curved block in its Frenet frame (T, N): signed curvature kappa(s) in [klo, khi] and its sharpness c
+ * (kappa'; 0 on arcs). Then (Beudaert eqs 2, 3, with q_ss = kappa N, q_sss = c N - kappa² T)
+ *     q''  = a T + kappa v² N,    q''' = jt T + jn N,   jt = j - kappa² v³,   jn = c v³ + 3 kappa v a,
+ * and for every axis |q_i'''| <= |jt| max|T_i| + |jn| max|N_i| and |q_i'''| <= |q'''| (likewise q''). These bounds
+ * credit what the magnitude budgets of the coefficients cannot: the cancellation of c v³ and 3 kappa v a
+ * (decelerating into a rising curvature, accelerating out of it), of j and kappa² v³, and that T and N are
+ * orthogonal. They are used where the magnitude budgets fail (check_block). */
+typedef struct cframe {
+    lsm_real klo, khi, c;
+} cframe;
+
+/* The frame of a clothoid (arcs are left to the magnitude budgets: their only credit would be j against kappa² v³
+ * and the orthogonality of T and N, c being 0, worth 0.3 % of the time on the circle and the pocket, and their frame
+ * bounds cost a fifth of a piece's planning on the dense M4 benchmark). */
+static void frame_of(const lsm_geom *g, cframe *f)
+{
+    const lsm_geom_clothoid *cl = &g->u.clo;
+    const lsm_real k1 = cl->kappa0_per_mm + cl->c_per_mm2 * g->len;
+    f->klo = lsm_min2(cl->kappa0_per_mm, k1);
+    f->khi = lsm_max2(cl->kappa0_per_mm, k1);
+    f->c = cl->c_per_mm2;
+}
+
+/* The smallest acceleration and jerk limits of the axes the plane of clothoid g touches, with the path limits,
+ * times VEC_LIMIT_SHARE (the bounds of |q''| and |q'''|); false: none. */
+static bool plane_limits(const lsm_planner *pl, const lsm_geom *g, lsm_real *amax, lsm_real *jmax)
+{
+    const lsm_real *e1 = g->u.clo.e1, *e2 = g->u.clo.e2;
+    const lsm_planner_config *cf = &pl->cfg;
+    lsm_real am = LSM_REAL_MAX, jm = LSM_REAL_MAX;
+    for (int i = 0; i < 3; i++) {
+        if (!(cf->axis_mask & (1u << i)) || (e1[i] == R0 && e2[i] == R0))
+            continue;
+        am = lsm_min2(am, cf->axis[i].a_max);
+        jm = lsm_min2(jm, cf->axis[i].j_max);
+    }
+    if (cf->path_a_max_mm_s2 > R0)
+        am = lsm_min2(am, cf->path_a_max_mm_s2);
+    if (cf->path_j_max_mm_s3 > R0)
+        jm = lsm_min2(jm, cf->path_j_max_mm_s3);
+    *amax = am * VEC_LIMIT_SHARE;
+    *jmax = jm * VEC_LIMIT_SHARE;
+    return am < LSM_REAL_MAX && jm < LSM_REAL_MAX;
+}
+
+/* max |x| over [lo, hi] */
+static lsm_real max_abs_in(lsm_real lo, lsm_real hi)
+{
+    return lsm_max2(lsm_fabs(lo), lsm_fabs(hi));
+}
+
+/* The jerk ratio of a bound |jt| wT + |jn| wN <= 1 (jt's range [tlo, thi], jn's largest magnitude bn; tq: the part
+ * of |jt| that does not scale with j; jmag: the largest |j|): >= 1 when it holds, else the factor the largest |j|
+ * may take (0 when the normal part alone breaks it). */
+static lsm_real jerk_ratio(lsm_real wT, lsm_real wN, lsm_real tlo, lsm_real thi, lsm_real bn, lsm_real tq,
+                           lsm_real jmag)
+{
+    const lsm_real room = R1 - wN * bn;
+    if (!(room > R0) || !(wT > R0))
+        return R0;
+    const lsm_real troom = room / wT;
+    const lsm_real scaled = jmag > R0 ? (troom - tq) / jmag : (troom >= tq ? LSM_REAL_MAX : R0);
+    return max_abs_in(tlo, thi) <= troom ? lsm_max2(R1, scaled) : lsm_max2(R0, scaled);
+}
+
+/* The frame's jerk ratio over the span k (the block's coefficients c): per axis, |jt| alpha_j + |jn| beta_j /
+ * kappa_max <= 1 (max|T_i| / J_i <= alpha_j, max|N_i| / J_i <= beta_j / kappa_max: the axes' directions are
+ * credited as in the coefficients), and, if that fails, the vector bound jt² + jn² <= J² (J: plane_limits). */
+static lsm_real frame_jerk_ratio(const lsm_planner *pl, const lsm_geom *g, const cframe *f, const coef *c,
+                                 const kspan *k)
+{
+    const lsm_real kabs = max_abs_in(f->klo, f->khi);
+    if (!(kabs > R0))
+        return R0;
+    const lsm_real k2lo = (f->klo <= R0 && f->khi >= R0) ? R0 : lsm_min2(f->klo * f->klo, f->khi * f->khi);
+    const lsm_real v3 = k->vhi * k->vhi * k->vhi, vlo2 = k->vlo * k->vlo;
+    /* jn = v (c v² + 3 kappa a), kappa a over the corners of [klo, khi] x [alo, ahi] */
+    const lsm_real p1 = f->klo * k->alo, p2 = f->klo * k->ahi, p3 = f->khi * k->alo, p4 = f->khi * k->ahi;
+    const lsm_real pmin = lsm_min2(lsm_min2(p1, p2), lsm_min2(p3, p4));
+    const lsm_real pmax = lsm_max2(lsm_max2(p1, p2), lsm_max2(p3, p4));
+    const lsm_real cv_a = f->c * vlo2, cv_b = f->c * k->vhi * k->vhi;
+    const lsm_real in_lo = lsm_min2(cv_a, cv_b) + LSM_R(3.0) * pmin;
+    const lsm_real in_hi = lsm_max2(cv_a, cv_b) + LSM_R(3.0) * pmax;
+    const lsm_real jn = k->vhi * max_abs_in(in_lo, in_hi);
+    /* jt = j - kappa² v³ */
+    const lsm_real tq = kabs * kabs * v3;
+    const lsm_real tlo = k->jlo - tq, thi = k->jhi - k2lo * vlo2 * k->vlo;
+    const lsm_real jmag = max_abs_in(k->jlo, k->jhi);
+    const lsm_real r = jerk_ratio(c->aj, c->bj / kabs, tlo, thi, jn, tq, jmag);
+    lsm_real am, jm;
+    if (r >= R1 || !plane_limits(pl, g, &am, &jm) || !(jn < jm))
+        return r;
+    const lsm_real troom = lsm_sqrt((jm - jn) * (jm + jn));
+    return lsm_max2(r, jerk_ratio(R1 / troom, R0, tlo, thi, R0, tq, jmag));
+}
+
+/* The frame's acceleration ratio over the span k: a² + kappa² v⁴ <= A² (A: plane_limits). */
+static lsm_real frame_acc_ratio(const lsm_planner *pl, const lsm_geom *g, const cframe *f, const kspan *k)
+{
+    lsm_real am, jm;
+    if (!plane_limits(pl, g, &am, &jm))
+        return R0;
+    const lsm_real an = max_abs_in(f->klo, f->khi) * k->vhi * k->vhi;
+    const lsm_real aroom = am > an ? lsm_sqrt((am - an) * (am + an)) : R0;
+    const lsm_real amag = max_abs_in(k->alo, k->ahi);
+    return amag > R0 ? aroom / amag : (aroom > R0 ? LSM_REAL_MAX : R0);
+}
+
 typedef struct rcheck {
     lsm_real ra, rj, rs; /* >= 1: the budgets hold; < 1: scale the ramp's a, j, snap by this */
     int vviol;           /* a speed above a block's cap */
@@ -198,10 +324,88 @@ typedef struct rcheck {
     lsm_real vcap;       /* and its cap */
 } rcheck;
 
-/* One sub-interval against the blocks it touches. */
-static void check_span(pctx *pc, lsm_real xa, lsm_real xb, lsm_real vhi, lsm_real amax, lsm_real jmax, lsm_real sn,
-                       rcheck *res)
+/* The ratios of one block (magnitude budgets of its coefficients; where they fail, the bounds of a planar curved
+ * block in its frame too, each ratio the better of the two) into res (planner_int.h, lsm_pl_block_ratios). */
+/* The magnitudes of a span, computed once for all the blocks it touches. */
+/* A sub-interval of a ramp: its two ends (v, a and j are monotone between them), its tangential snap bound (0:
+ * none), and the magnitudes every block's check uses, computed once. */
+typedef struct kmag {
+    const lsm_kin *p, *q;
+    lsm_real sn;
+    lsm_real v, v2, v3, amax, jmax;
+} kmag;
+
+static void kmag_of(const lsm_kin *p, const lsm_kin *q, lsm_real sn, kmag *m)
 {
+    m->p = p;
+    m->q = q;
+    m->sn = sn;
+    m->v = lsm_max2(p->v_mm_s, q->v_mm_s);
+    m->v2 = m->v * m->v;
+    m->v3 = m->v2 * m->v;
+    m->amax = lsm_max2(lsm_fabs(p->a_mm_s2), lsm_fabs(q->a_mm_s2));
+    m->jmax = lsm_max2(lsm_fabs(p->j_mm_s3), lsm_fabs(q->j_mm_s3));
+}
+
+/* Where a clothoid fails its magnitude budgets: the ratios raised by its frame bounds, but only where it would set
+ * the span's ratios (below those of the blocks before it): elsewhere they cannot change the result. */
+static void frame_improve(const lsm_planner *pl, const lsm_pblock *b, const kmag *m, const coef *c, const rcheck *res,
+                          lsm_real *ra_acc, lsm_real *ra_cross, lsm_real *rj)
+{
+    const lsm_real ra_floor = lsm_min2(res->ra, R1), rj_floor = lsm_min2(res->rj, R1);
+    const bool j_binds = *rj < rj_floor;
+    if (!(lsm_min2(*ra_acc, *ra_cross) < ra_floor || j_binds))
+        return;
+    cframe f;
+    frame_of(&b->g, &f);
+    kspan k;
+    kspan_of(m->p, m->q, &k);
+    if (*ra_acc < ra_floor)
+        *ra_acc = lsm_max2(*ra_acc, frame_acc_ratio(pl, &b->g, &f, &k));
+    if (*ra_cross < ra_floor || j_binds) {
+        const lsm_real fj = frame_jerk_ratio(pl, &b->g, &f, c, &k);
+        if (fj >= R1) /* the jerk holds: the acceleration need not make room for it */
+            *ra_cross = lsm_max2(*ra_cross, R1);
+        *rj = lsm_max2(*rj, fj);
+    }
+}
+
+static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *m, rcheck *res)
+{
+    coef c;
+    coef_get(b, &c);
+    lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
+    if (m->amax > R0 && c.aa > R0) {
+        const lsm_real al = (R1 - c.ba * m->v2) / c.aa;
+        ra_acc = al > R0 ? al / m->amax : R0;
+    }
+    if (c.aj > R0) {
+        const lsm_real room = R1 - c.gj * m->v3;
+        const lsm_real cross = LSM_R(3.0) * c.bj * m->v * m->amax;
+        if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
+            ra_cross = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
+            rj = CROSS_SHARE_TARGET;
+        } else if (m->jmax > R0) {
+            rj = (room - cross) / c.aj / m->jmax;
+        }
+    }
+    if ((ra_acc < R1 || ra_cross < R1 || rj < R1) && b->g.kind == LSM_GEOM_CLOTHOID)
+        frame_improve(pl, b, m, &c, res, &ra_acc, &ra_cross, &rj);
+    res->ra = lsm_min2(res->ra, lsm_min2(ra_acc, ra_cross));
+    res->rj = lsm_min2(res->rj, rj);
+    if (m->sn > R0 && c.as > R0) {
+        const lsm_real r = (R1 / c.as) / m->sn;
+        if (r < res->rs)
+            res->rs = r;
+    }
+}
+
+/* One sub-interval [xa, xb] (either order) against the blocks it touches. */
+static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, const lsm_kin *q, lsm_real sn, rcheck *res)
+{
+    kmag km;
+    kmag_of(p, q, sn, &km);
+    const kmag *m = &km;
     const lsm_planner *pl = pc->pl;
     if (xb < xa) {
         const lsm_real t = xa;
@@ -214,7 +418,7 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, lsm_real vhi, lsm_rea
     for (;;) {
         const lsm_pblock *b = blk(pl, id);
         const lsm_real cap = cap_floor(pl, id, b, pc->floor);
-        if (vhi > cap * (R1 + CAP_SLACK)) {
+        if (m->v > cap * (R1 + CAP_SLACK)) {
             if (!res->vviol) {
                 res->vviol = 1;
                 res->vx0 = x;
@@ -223,40 +427,25 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, lsm_real vhi, lsm_rea
             }
             return;
         }
-        coef c;
-        coef_get(b, &c);
-        const lsm_real v = vhi;
-        if (amax > R0 && c.aa > R0) {
-            const lsm_real al = (R1 - c.ba * v * v) / c.aa;
-            const lsm_real r = al > R0 ? al / amax : R0;
-            if (r < res->ra)
-                res->ra = r;
-        }
-        if (c.aj > R0) {
-            const lsm_real room = R1 - c.gj * v * v * v;
-            const lsm_real cross = LSM_R(3.0) * c.bj * v * amax;
-            if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
-                const lsm_real r = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
-                if (r < res->ra)
-                    res->ra = r;
-                if (res->rj > CROSS_SHARE_TARGET)
-                    res->rj = CROSS_SHARE_TARGET;
-            } else if (jmax > R0) {
-                const lsm_real r = (room - cross) / c.aj / jmax;
-                if (r < res->rj)
-                    res->rj = r;
-            }
-        }
-        if (sn > R0 && c.as > R0) {
-            const lsm_real r = (R1 / c.as) / sn;
-            if (r < res->rs)
-                res->rs = r;
-        }
+        check_block(pl, b, m, res);
         x += b->g.len;
         id++;
         if (!(x < xb) || id == pc->id_end)
             break;
     }
+}
+
+void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, const lsm_kin *hi, lsm_real *ra,
+                         lsm_real *rj)
+{
+    pctx pc;
+    lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
+    rcheck res;
+    res.ra = res.rj = res.rs = LSM_REAL_MAX;
+    res.vviol = 0;
+    check_span(&pc, R0, R0, lo, hi, R0, &res);
+    *ra = res.vviol ? R0 : res.ra;
+    *rj = res.vviol ? R0 : res.rj;
 }
 
 /* Verifies a ramp placed at x_s (its start). */
@@ -272,7 +461,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
     lsm_kin st = {R0, r->v0, R0, R0};
     const lsm_real sn = ramp_speak(r, dt);
     if (lsm_scurve_total_cycles(&r->iv) == 0) {
-        check_span(pc, x_s, x_s, r->v0, R0, R0, R0, res);
+        check_span(pc, x_s, x_s, &st, &st, R0, res);
         return;
     }
     for (int p = 0; p < 7; p++) {
@@ -289,10 +478,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
             lsm_kin e;
             lsm_phase_end(&ph[p], dt, &st, &e);
             rcheck whole = *res;
-            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, lsm_max2(st.v_mm_s, e.v_mm_s),
-                       lsm_max2(lsm_fabs(st.a_mm_s2), lsm_fabs(e.a_mm_s2)),
-                       lsm_max2(lsm_fabs(st.j_mm_s3), lsm_fabs(e.j_mm_s3)), ph[p].shape == LSM_PHASE_CONST ? R0 : sn,
-                       &whole);
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, &whole);
             if (!whole.vviol && whole.ra >= R1 && whole.rj >= R1 && whole.rs >= R1) {
                 res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
                 res->rj = lsm_min2(res->rj, whole.rj);
@@ -307,11 +493,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
                 lsm_phase_end(&ph[p], dt, &st, &cur);
             else
                 phase_at(&ph[p], T, &st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &cur);
-            const lsm_real vhi = lsm_max2(prev.v_mm_s, cur.v_mm_s);
-            const lsm_real amax = lsm_max2(lsm_fabs(prev.a_mm_s2), lsm_fabs(cur.a_mm_s2));
-            const lsm_real jmax = lsm_max2(lsm_fabs(prev.j_mm_s3), lsm_fabs(cur.j_mm_s3));
-            check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, vhi, amax, jmax, ph[p].shape == LSM_PHASE_CONST ? R0 : sn,
-                       res);
+            check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, res);
             if (res->vviol)
                 return;
             prev = cur;

@@ -144,6 +144,13 @@ typedef struct ramp {
     lsm_real a_lim, j_lim, s_lim;
 } ramp;
 
+/* The budget ratios of block id over a sub-interval of a ramp whose ends are lo and hi (v, a, j: each between its
+ * values there), as a ramp's check takes them: >= 1 where every axis's acceleration (ra) and jerk (rj) hold; below
+ * 1, about the factor the ramp's peak may take (0: the speed is above the block's cap). The magnitude budgets of the
+ * coefficients, and on a clothoid where they fail, the bounds in its Frenet frame, which credit the cancellation of
+ * c v³ and 3 kappa v a and of j and kappa² v³ (planner.h, "Limits"; plan_ramp.c, check_block). */
+void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, const lsm_kin *hi, lsm_real *ra,
+                         lsm_real *rj);
 /* Plans v0 -> v1 with the tangential limits a, j, s (strict whole-cycle rule); false if none. */
 bool lsm_pl_ramp_plan(ramp *r, lsm_real dt, lsm_real v0, lsm_real v1, lsm_real a, lsm_real j, lsm_real s);
 /* First guess of the tangential limits near x: the block's budgets at rest. */

@@ -22,7 +22,8 @@
  *   So at most about 2.5 (lines) and 3.5 (arcs); K = 4 holds them with half an ulp to spare.
  * Measurement (scripts/fuzz_float_noise.py over the 479 fuzz_planner_float inputs of the 1 h run, FZ_MEASURE in
  *   tests/fuzz/fz_measure.h, at 012c2c0+): the error's own differences |D_n e| / 2^n u (e = q - q* at the exact
- *   time, lines and arcs) at most 2.67 (n = 1), 1.84 (n = 2), 1.60 (n = 3); |q - q*(cursor)| at most 3.28; and
+ *   time, lines and arcs) at most 2.67 (n = 1), 1.84 (n = 2), 1.60 (n = 3); |q - q*(cursor)| at most 3.28 (3.64 merged with
+ *   765b5ef, the rest the same); and
  *   over every input, clothoids included, the largest excess of |D_n q| over L_n dt^n is 1.49 x 2 u (n = 1),
  *   0.80 x 4 u, 1.23 x 8 u. Before the fixes of interp.c (on 7cc6ed6: a phase clock summed per cycle, the travel
  *   v tau - sloc rounded to ulp of the phase's travel, the arc's angle rounded to ulp(phi), the cursor's low part

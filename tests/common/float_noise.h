@@ -30,8 +30,8 @@
  *   left out, switch points not scaled like the travel, the planner's phase lengths (ulp of the piece) and a
  *   piece's rounding snapped at its end) the same inputs' error differences reached 74.8 u (n = 1; 15 inputs
  *   over 16 u), 14.7 (n = 2), 14.6 (n = 3), |q - q*(cursor)| 22.3 u, and the excess over the limits 6.33 x 8 u.
- *   tests/plan/test_interp_noise.c checks the bound on random paths (30 000 of them pass at seeds 1, 12, 13,
- *   20-39 x 3000; several of those failed before the last fixes).
+ *   tests/plan/test_interp_noise.c checks the bound on random paths (75 000 of them pass: seeds 1, 12, 13,
+ *   20-41 x 3000; several of those failed before the last fixes: the phase lengths and the stretch).
  * The old bounds were 1 u (fz_path.h: 2, 4, 8 x 1.2e-7 S) and 4 u (pp_check.h): one bound now, 4 u.
  */
 #ifndef FLOAT_NOISE_H

@@ -10,10 +10,28 @@
 #define R1 LSM_R(1.0)
 #define ARC_ANCHOR_CYCLES 256u
 #if LSM_REAL_IS_FLOAT
-#define PATH_DS(ip, ds) ((ds) * (ip)->ds_scale) /* interp.h: the piece's phases scaled to its length */
+#define PATH_DS(ip, ds) ((ds) + (ds) * (ip)->ds_stretch) /* interp.h: the piece's phases scaled to its length */
+#define PATH_LO(ip, ds) ((ds) * (ip)->ds_stretch) /* the cursor adds it to its low part: no rounding of ds (1 + e) */
 #else
 #define PATH_DS(ip, ds) (ds)
+#define PATH_LO(ip, ds) R0
 #endif
+/* The cursor's exact offset is off_mm + off_lo_mm (float: a compensated sum); the evaluation uses both, so the
+ * setpoints carry the rounding of the coordinates, not ulp(off_mm)/2 of the offset along the path (ulp(off) is
+ * up to 16 ulp of the coordinates on an arc of three turns). The anchor's offset a_off is a float (exact), and
+ * off_mm - a_off is exact (Sterbenz) within the anchor's range. */
+#if LSM_REAL_IS_FLOAT
+#define CURSOR_TERM(d, ip) ((d) * (ip)->off_mm + (d) * (ip)->off_lo_mm)
+#define ARC_DS(ip) (((ip)->off_mm - (ip)->a_off) + (ip)->off_lo_mm)
+#else
+#define CURSOR_TERM(d, ip) ((d) * (ip)->off_mm)
+#define ARC_DS(ip) ((ip)->off_mm - (ip)->a_off)
+#endif
+/* Float: phases that add up to less than their piece by at most this (relative) are stretched to it, like those that
+ * add up to more are shrunk: the rounding of 17 float phase lengths, a few ulp, left the cursor short of the end by
+ * up to 2e-4 mm on a 640 mm helix, a setpoint jump where end_piece put it on the end. 2^-20: 8 ulp, and within the
+ * planner's 1e-6 relative margin on v, a and j (a larger shortfall is not rounding: it stays visible). */
+#define DS_STRETCH_MAX LSM_R(9.5367431640625e-7)
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
@@ -31,6 +49,43 @@ static const lsm_pblock *bk(const lsm_interp *ip, uint32_t id)
     return lsm_planner_block(ip->pl, id);
 }
 
+
+#if LSM_REAL_IS_FLOAT
+/* The travel of phase p of piece pc: its closed form at tau = T (the travel the cycle's steps add up to; sin(pi) = 0,
+ * cos(pi) = -1 exactly). */
+static lsm_real phase_len(const lsm_piece *pc, uint8_t p)
+{
+    const lsm_piece_phase *ph = &pc->ph[p];
+    const lsm_kin *st = &pc->st[p];
+    const lsm_real T = ph->T_s, sv = st->v_mm_s * T;
+    if (p == 0u || p == 8u || p == LSM_PIECE_PHASES - 1u)
+        return sv;
+    lsm_real k = R1 / LSM_R(6.0); /* T^3 k: the jerk's share, t^3/6, or t^3/12 -+ t T^2/(2 pi^2) at t = T */
+    if (ph->shape != LSM_PHASE_CONST)
+        k = R1 / LSM_R(12.0) + (ph->shape == LSM_PHASE_RISE ? -R1 : R1) * (R1 / (LSM_R(2.0) * PI_R * PI_R));
+    return sv + st->a_mm_s2 * T * T * LSM_R(0.5) + ph->jerk_mm_s3 * T * T * T * k;
+}
+
+/* Float, when a piece is planned (plan_switch): each phase's length becomes its closed-form travel (phase_len) and
+ * each phase's start their sum, instead of the planner's: those come from piece-relative positions and carry their rounding, ulp(s) of
+ * up to the whole piece (a 6e-5 mm phase length, negative, on a 586 mm helix, whose travel is 6e-6 mm), which the
+ * cursor jumped by at the phase's end. Writes the piece's travel, their sum, as hi + lo. (The piece buffer is the
+ * interpolator's; the planner only writes the other one.) */
+static void own_phase_lengths(lsm_piece *pc, lsm_real sum[2])
+{
+    lsm_real s = R0, lo = R0; /* the sum, compensated (TwoSum): its rounding set the stretch off by 2 ulp of a 666 mm
+                                 piece, the cursor ending 1.3e-4 mm beyond it */
+    for (uint8_t p = 0; p < LSM_PIECE_PHASES; p++) {
+        pc->st[p].s_mm = s;
+        const lsm_real x = pc->ph[p].T_s > R0 ? phase_len(pc, p) : R0, t = s + x, xx = t - s;
+        pc->ph[p].len_mm = x;
+        lo += (s - (t - xx)) + (x - xx);
+        s = t;
+    }
+    sum[0] = s;
+    sum[1] = lo;
+}
+#endif
 
 /* ---------------------------------------------------------------------------------------------------------- */
 /* geometry of the current block                                                                               */
@@ -75,6 +130,42 @@ static void block_end(const lsm_interp *ip, uint32_t id, lsm_real e[3])
     }
 }
 
+#if LSM_REAL_IS_FLOAT
+/* a b = *hi + *lo exactly (Dekker's product with Veltkamp's split; + - * only, so the Cortex-M4F gives the same bits) */
+static void two_prod(lsm_real a, lsm_real b, lsm_real *hi, lsm_real *lo)
+{
+    const lsm_real k = LSM_R(4097.0); /* 2^12 + 1: splits a float's 24 bits into 12 + 12 */
+    const lsm_real ca = k * a, cb = k * b;
+    const lsm_real ah = ca - (ca - a), al = a - ah, bh = cb - (cb - b), bl = b - bh;
+    *hi = a * b;
+    *lo = ((ah * bh - *hi) + ah * bl + al * bh) + al * bl;
+}
+
+/* The float arc at offset s along the curve the cycle evaluates (phase rate aw = sweep / len): its point p (the
+ * chord from the start, geom.h) and, in (cp, sp), the unit vector's cos and sin of phi0 + aw s. The angle aw s is
+ * carried as an exact sum hi + lo and added to phi0 by rotating (cos phi0, sin phi0): no rounding of the angle to
+ * ulp(phi0 + aw s), which is 1e-6 rad at 16 rad, r 1e-6 of position (10 ulp of the coordinates seen on R 100
+ * arcs at every re-anchoring). The angle's error is then a few ulp of 1 rad, whatever the sweep. */
+static void arc_point(const lsm_interp *ip, const lsm_geom *g, lsm_real s, lsm_real p[3], lsm_real *cp, lsm_real *sp)
+{
+    const lsm_geom_arc *a = &g->u.arc;
+    lsm_real dh, dl, s0, c0, sh, ch;
+    two_prod(ip->aw, s, &dh, &dl);
+    lsm_sincos(a->phi0_rad, &s0, &c0);
+    lsm_sincos(LSM_R(0.5) * dh, &sh, &ch); /* the half angle (exact halving) ... */
+    const lsm_real hl = LSM_R(0.5) * dl;   /* ... and its low part, to first order (hl^2 < 1e-12) */
+    const lsm_real shc = sh + ch * hl, chc = ch - sh * hl;
+    const lsm_real cm = c0 * chc - s0 * shc, sm = s0 * chc + c0 * shc; /* phi0 + half the angle */
+    const lsm_real k = LSM_R(2.0) * a->radius_mm * shc, ax = a->axial_mm * (s / g->len);
+    lsm_real n[3];
+    lsm_cross3(a->e1, a->e2, n);
+    for (int i = 0; i < 3; i++)
+        p[i] = a->start_mm[i] + k * (cm * a->e2[i] - sm * a->e1[i]) + n[i] * ax;
+    *cp = cm * chc - sm * shc;
+    *sp = sm * chc + cm * shc;
+}
+#endif
+
 /* Sets the float arc anchor at the cursor (interp.h); the end correction is computed afresh on a block's entry and
  * when its length changed (a trim), else kept from the previous anchor. */
 static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
@@ -83,9 +174,15 @@ static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
     lsm_real n[3];
     lsm_cross3(a->e1, a->e2, n);
     lsm_real c[3];
+    ip->aw = a->sweep_rad / g->len;
     if (ip->anchor == 0u || g->len != ip->a_len) {
         lsm_real pe[LSM_MAX_AXES], e[3];
+#if LSM_REAL_IS_FLOAT
+        lsm_real ce, se;
+        arc_point(ip, g, g->len, pe, &ce, &se);
+#else
         (void)lsm_geom_eval(g, g->len, pe, NULL, NULL);
+#endif
         block_end(ip, ip->blk, e);
         for (int i = 0; i < 3; i++)
             c[i] = (e[i] - pe[i]) / g->len;
@@ -93,14 +190,17 @@ static void arc_anchor(lsm_interp *ip, const lsm_geom *g)
         for (int i = 0; i < 3; i++)
             c[i] = ip->a_L[i] - n[i] * (a->axial_mm / g->len);
     }
-    ip->aw = a->sweep_rad / g->len;
     ip->anchor = 0;
     ip->a_len = g->len;
     ip->a_off = ip->off_mm;
     lsm_real p[LSM_MAX_AXES];
-    (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
     lsm_real sp, cp;
+#if LSM_REAL_IS_FLOAT
+    arc_point(ip, g, ip->a_off, p, &cp, &sp);
+#else
+    (void)lsm_geom_eval(g, ip->a_off, p, NULL, NULL);
     lsm_sincos(a->phi0_rad + ip->aw * ip->a_off, &sp, &cp);
+#endif
     for (int i = 0; i < 3; i++) {
         const lsm_real corr = c[i];
         ip->a_p[i] = p[i] + corr * ip->a_off;
@@ -140,9 +240,9 @@ static void eval_pos_in(lsm_interp *ip, const lsm_pblock *b)
     const lsm_geom *g = &b->g;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
-            ip->pos[i] = g->u.line.p0[i] + g->u.line.dir[i] * ip->off_mm;
+            ip->pos[i] = g->u.line.p0[i] + CURSOR_TERM(g->u.line.dir[i], ip);
     } else if (g->kind == LSM_GEOM_ARC) {
-        const lsm_real ds = ip->off_mm - ip->a_off;
+        const lsm_real ds = ARC_DS(ip);
         lsm_real sn, cm1;
         sincos_m1_small(ip->aw * ds, &sn, &cm1);
         for (int i = 0; i < 3; i++)
@@ -162,11 +262,14 @@ static void eval_pos(lsm_interp *ip)
         eval_pos_in(ip, b);
 }
 
-/* Moves the cursor by ds (>= 0) and evaluates the position there. */
-static void advance_path(lsm_interp *ip, lsm_real ds)
+/* Moves the cursor by ds (>= 0) plus ds_lo (a small correction, float: the piece's stretch) and evaluates the position
+ * there. */
+static void advance_path(lsm_interp *ip, lsm_real ds, lsm_real ds_lo)
 {
-    if (!(ds > R0))
+    if (!(ds > R0)) {
         ds = R0;
+        ds_lo = R0;
+    }
     const lsm_planner *pl = ip->pl;
     const lsm_pblock *b = bk(ip, ip->blk);
     if (b == NULL)
@@ -175,11 +278,12 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
         activate(ip); /* (re)started on a block that was never set up */
 #if LSM_REAL_IS_FLOAT
     {
-        const lsm_real y = ds + ip->off_lo_mm, t = ip->off_mm + y;
+        const lsm_real y = ds + (ip->off_lo_mm + ds_lo), t = ip->off_mm + y;
         ip->off_lo_mm = y - (t - ip->off_mm); /* exact when |off| >= |y| (Fast2Sum), and when off is 0 */
         ip->off_mm = t;
     }
 #else
+    (void)ds_lo;
     ip->off_mm += ds;
 #endif
     bool moved = false;
@@ -203,7 +307,7 @@ static void advance_path(lsm_interp *ip, lsm_real ds)
             b->g.len != ip->a_len)
             arc_anchor(ip, &b->g);
     } else if (ip->gkind == LSM_GEOM_CLOTHOID && ds > R0) {
-        (void)lsm_clothoid_step(&ip->cs, ds, NULL);
+        (void)lsm_clothoid_step(&ip->cs, ds + ds_lo, NULL); /* the stepper keeps its own s: the stretch is in it */
     }
     eval_pos_in(ip, b); /* b is the block at the cursor (looked up once per cycle: a lookup is a call and a division) */
 }
@@ -259,12 +363,17 @@ static void start_piece(lsm_interp *ip, lsm_real first)
     ip->phase = 0;
 #if LSM_REAL_IS_FLOAT
     {
-        const lsm_real sum = pc->st[LSM_PIECE_PHASES - 1].s_mm + pc->ph[LSM_PIECE_PHASES - 1].len_mm;
-        ip->ds_scale = sum > pc->len_mm && pc->len_mm > R0 ? pc->len_mm / sum : R1;
+        const lsm_real sum = ip->nx_sum[0]; /* (piece_constants: this piece's own lengths, summed exactly) */
+        const lsm_real d = (pc->len_mm - sum) - ip->nx_sum[1]; /* len - sum exact (Sterbenz: within 1e-5) */
+        const bool fits = d < R0 || d <= DS_STRETCH_MAX * sum;
+        ip->ds_stretch = pc->len_mm > R0 && sum > R0 && fits ? d / sum : R0;
     }
 #endif
     ip->tau = R0;
+    ip->tau0 = R0;
+    ip->tau_n = 0;
     ip->sloc = R0;
+    ip->sloc_lo = R0;
     ip->rc = R1;
     ip->rs = R0;
     /* per ramp: the offset of the samples to its phase starts, and the rotation step */
@@ -288,10 +397,9 @@ static void start_piece(lsm_interp *ip, lsm_real first)
                 e = R0;
             ip->ee[r] = e;
             const lsm_real T1 = (lsm_real)n1 * dt;
-            ip->ce[r] = lsm_cos(PI_R * e / T1);
-            ip->se[r] = lsm_sin(PI_R * e / T1);
-            ip->cd[r] = lsm_cos(PI_R / (lsm_real)n1);
-            ip->sd[r] = lsm_sin(PI_R / (lsm_real)n1);
+            lsm_sincos(PI_R * e / T1, &ip->se[r], &ip->ce[r]); /* (the same bits as lsm_sin and lsm_cos) */
+            ip->cd[r] = ip->nx_cd[r];                          /* plan_switch's, for this piece */
+            ip->sd[r] = ip->nx_sd[r];
         }
     }
 }
@@ -366,8 +474,12 @@ static void boundary_point(const lsm_interp *ip, uint8_t b, swpt *w)
         w->v = ip->hz_v;
         return;
     }
+#if LSM_REAL_IS_FLOAT
+    const lsm_real d = (CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc)) - ip->sloc_lo;
+#else
     const lsm_real d = CUR(ip).st[b].s_mm - (CUR(ip).st[ip->phase].s_mm + ip->sloc);
-    ahead(ip, d > R0 ? d : R0, &w->blk, &w->off);
+#endif
+    ahead(ip, d > R0 ? PATH_DS(ip, d) : R0, &w->blk, &w->off);
     w->v = CUR(ip).st[b].v_mm_s;
 }
 
@@ -383,7 +495,7 @@ static void replace_point(const lsm_interp *ip, swpt *w)
         if (fits) {
             w->kind = LSM_INTERP_SW_SAMPLE;
             w->cycle = ip->cycles + 1u + L;
-            ahead(ip, CUR(ip).st[p].v_mm_s * (lsm_real)L * dt, &w->blk, &w->off);
+            ahead(ip, PATH_DS(ip, CUR(ip).st[p].v_mm_s * (lsm_real)L * dt), &w->blk, &w->off);
             w->v = ip->v_mm_s;
             return;
         }
@@ -446,6 +558,23 @@ static bool same_switch(const lsm_interp *ip, const lsm_interp_prep *q, const sw
     }
 }
 
+/* What the cycle needs of the piece just planned into the second buffer, computed with it (the background): per ramp
+ * cos and sin of pi / n1 (start_piece), and in the float build its own phase lengths (own_phase_lengths). */
+static void piece_constants(lsm_interp *ip)
+{
+    const lsm_piece *pc = &NXT(ip);
+    for (int r = 0; r < 2; r++) {
+        const uint32_t n1 = pc->ph[r == 0 ? 1 : 9].n_cycles;
+        ip->nx_cd[r] = R1;
+        ip->nx_sd[r] = R0;
+        if (n1)
+            lsm_sincos(PI_R / (lsm_real)n1, &ip->nx_sd[r], &ip->nx_cd[r]);
+    }
+#if LSM_REAL_IS_FLOAT
+    own_phase_lengths(&NXT(ip), ip->nx_sum);
+#endif
+}
+
 /* Plans the piece for switch point w into the slot. */
 static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
 {
@@ -474,6 +603,8 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
         ip->plan_errors++;
         st = LSM_OK;
     }
+    if (st == LSM_OK)
+        piece_constants(ip); /* here, where the piece is planned: not in the cycle that takes it */
     if (st == LSM_OK && NXT(ip).T_s > R0) {
         q->ready = 1;
         return LSM_OK;
@@ -598,6 +729,69 @@ static lsm_real phase_travel(lsm_interp *ip, uint8_t p, lsm_real tau, bool enter
     return st->v_mm_s * tau + st->a_mm_s2 * tau * tau / LSM_R(2.0) + jk * f;
 }
 
+/* The phase clock advanced by dt_adv. Float: a whole cycle counts, tau = tau0 + n dt, so tau is one rounding off
+ * its exact value at every sample; tau += dt drifted by up to ulp(tau)/2 per cycle, a velocity error of up to
+ * ulp(tau) / (2 dt) relative (1e-4 at tau 2 s, dt 2 ms: a cruise at the axis limit went 0.1 mm/s over it), which
+ * snapped back at the phase's end. Any other advance (the rest of a cycle) restarts the count there. */
+static lsm_real phase_clock(lsm_interp *ip, lsm_real dt_adv)
+{
+#if LSM_REAL_IS_FLOAT
+    const lsm_real dt = ip->pl->cfg.cycle_s;
+    if (dt_adv == dt && ip->tau_n < UINT32_MAX) {
+        ip->tau_n++;
+        return ip->tau0 + (lsm_real)ip->tau_n * dt;
+    }
+    ip->tau0 = ip->tau + dt_adv;
+    ip->tau_n = 0;
+    return ip->tau0;
+#else
+    return ip->tau + dt_adv;
+#endif
+}
+
+#if LSM_REAL_IS_FLOAT
+/* One whole cycle in phase p, from the last sample (tau = tp) to tk = tp + dt: the travel s(tk) - s(tp) of
+ * phase_travel's closed forms, written as dt times the mean rate over the cycle (tk^2 - tp^2 = dt (tk + tp),
+ * tk^3 - tp^3 = dt (tk^2 + tk tp + tp^2)) plus, in a sin² phase, J sg T³/(2 pi³) times the step of the rotation's
+ * sine. s(tk) - sloc rounded both to ulp(s) of the phase's travel, and tau's rounding moved s by v ulp(tau): on a
+ * phase longer than the coordinates (a 285 mm cruise on an arc at coordinates of 73 mm, a 28 mm ramp phase at
+ * 17 mm) 3-5 ulp of the coordinates of noise in every setpoint. Here the error is a few ulp of ds itself, and the
+ * cursor sums exactly; sloc is summed compensated, so the phase's end takes up only what the steps' own rounding
+ * drifted (a few ulp of ds per cycle, mostly cancelling). Updates the rotation and writes the velocity at tk. */
+static lsm_real phase_step(lsm_interp *ip, uint8_t p, lsm_real tk, lsm_real *v)
+{
+    const lsm_kin *st = &CUR(ip).st[p];
+    const lsm_real dt = ip->pl->cfg.cycle_s;
+    lsm_real ds;
+    if (is_cruise(p)) {
+        *v = st->v_mm_s;
+        ds = st->v_mm_s * dt;
+    } else {
+        const lsm_piece_phase *ph = &CUR(ip).ph[p];
+        const lsm_real tp = ip->tau, jk = ph->jerk_mm_s3, q = tk * tk + tk * tp + tp * tp;
+        const lsm_real rate = st->v_mm_s + st->a_mm_s2 * (LSM_R(0.5) * (tk + tp)), va = st->v_mm_s + st->a_mm_s2 * tk;
+        if (ph->shape == LSM_PHASE_CONST) {
+            *v = va + jk * (LSM_R(0.5) * tk * tk);
+            ds = dt * (rate + jk * q * (R1 / LSM_R(6.0)));
+        } else { /* the rotation one cycle on (phase_travel's recurrence), the sin² closed forms' steps */
+            const int r = p < 8u ? 0 : 1;
+            const lsm_real rs0 = ip->rs, c = ip->rc * ip->cd[r] - ip->rs * ip->sd[r];
+            ip->rs = ip->rs * ip->cd[r] + ip->rc * ip->sd[r];
+            ip->rc = c;
+            const lsm_real T = ph->T_s, k8 = T * T * (R1 / (LSM_R(2.0) * PI_R * PI_R)), k16 = k8 * T * (R1 / PI_R);
+            const lsm_real sgj = ph->shape == LSM_PHASE_RISE ? jk : -jk;
+            *v = va + jk * (LSM_R(0.25) * tk * tk) - sgj * (R1 - c) * k8;
+            ds = dt * (rate + jk * q * (R1 / LSM_R(12.0)) - sgj * k8) + sgj * k16 * (ip->rs - rs0);
+        }
+    }
+    /* Fast2Sum: exact once sloc >= ds, i.e. after the phase's first cycle (before, the error is under ulp(ds)) */
+    const lsm_real y = ds + ip->sloc_lo, t = ip->sloc + y;
+    ip->sloc_lo = y - (t - ip->sloc);
+    ip->sloc = t;
+    return ds;
+}
+#endif
+
 /*
  * Advances the piece clock by dt_adv; returns the distance travelled (ds >= 0 modulo rounding) and whether the
  * piece ended (then *left is the time beyond its end), or stopped at a boundary where a new piece starts
@@ -607,14 +801,17 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
 {
     lsm_real ds = R0;
     uint8_t p = ip->phase;
-    lsm_real tau = ip->tau + dt_adv;
+    lsm_real tau = phase_clock(ip, dt_adv);
     bool entered = false;
     *ended = false;
     *brk = false;
     while (p < LSM_PIECE_PHASES && tau >= CUR(ip).ph[p].T_s) {
-        ds += CUR(ip).ph[p].len_mm - ip->sloc;
+        ds += (CUR(ip).ph[p].len_mm - ip->sloc) - ip->sloc_lo;
         tau -= CUR(ip).ph[p].T_s;
+        ip->tau0 = tau; /* the count restarts at the first sample of the phase entered */
+        ip->tau_n = 0;
         ip->sloc = R0;
+        ip->sloc_lo = R0;
         p++;
         entered = true;
         if (p == 1u || p == 9u) {
@@ -622,11 +819,13 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
              * lsm_planner_set_horizon) */
             const int e = p == 1u ? 8 : 16;
             ip->hz_v = CUR(ip).st[e].v_mm_s;
-            ahead(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds, &ip->hz_blk, &ip->hz_off);
+            ahead(ip, PATH_DS(ip, CUR(ip).st[e].s_mm - CUR(ip).st[p].s_mm + ds), &ip->hz_blk, &ip->hz_off);
         }
         if (p < LSM_PIECE_PHASES && stop_at_boundary(ip, p)) {
             ip->phase = p;
             ip->tau = R0;
+            ip->tau0 = R0;
+            ip->tau_n = 0;
             *brk = true;
             *left = tau;
             return ds;
@@ -637,12 +836,23 @@ static lsm_real piece_advance(lsm_interp *ip, lsm_real dt_adv, bool *ended, lsm_
         *ended = true;
         *left = tau;
         ip->tau = R0;
+        ip->tau0 = R0;
+        ip->tau_n = 0;
         return ds;
     }
     lsm_real v;
+#if LSM_REAL_IS_FLOAT
+    if (!entered && ip->tau_n > 0u) {
+        ds += phase_step(ip, p, tau, &v);
+        ip->tau = tau;
+        ip->v_mm_s = v;
+        return ds;
+    }
+#endif
     const lsm_real s = phase_travel(ip, p, tau, entered, &v);
     ds += s - ip->sloc;
     ip->sloc = s;
+    ip->sloc_lo = R0;
     ip->tau = tau;
     ip->v_mm_s = v;
     return ds;
@@ -732,14 +942,14 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
-                advance_path(ip, PATH_DS(ip, ds));
+                advance_path(ip, ds, PATH_LO(ip, ds));
                 ip->gen = ip->pl->gen; /* once per boundary: the current piece stays valid if none was found */
             }
             adv = left;
             continue;
         }
         if (!ended) {
-            advance_path(ip, PATH_DS(ip, ds));
+            advance_path(ip, ds, PATH_LO(ip, ds));
             post_horizon(ip);
             return;
         }
@@ -777,7 +987,7 @@ lsm_status lsm_interp_init(lsm_interp *ip, lsm_planner *pl)
     ip->blk = pl->head;
     ip->off_mm = R0;
     ip->ovr = R1;
-    ip->ds_scale = R1;
+    ip->ds_stretch = R0;
     for (int i = 0; i < LSM_MAX_AXES; i++)
         ip->pos[i] = pl->tail_pos[i];
     if (pl->tail != pl->head) {

@@ -28,8 +28,14 @@
  * of the sum of the travel instead of drifting by up to N/2 ulp (the drift came back as a step where the cursor is
  * put exactly on the piece's end).
  * The phases of a piece can add up to a little more than the piece (a ramp's float rounding where no cruise is left to
- * absorb it: up to ~1e-5 of it); the float build scales the travel by len / sum, so that the cursor arrives exactly at
- * the piece's end (a factor 1 - 1e-5 on v, a and j, instead of a step where the cursor is put on the end).
+ * absorb it: up to ~1e-5 of it), or a few ulp less; the float build scales the travel by len / sum, so that the cursor
+ * arrives exactly at the piece's end (a factor 1 - 1e-5 .. 1 + 2^-20 on v, a and j, instead of a step where the
+ * cursor is put on the end), and its switch points and horizons with it. The factor is kept as 1 + e, and the
+ * cursor adds ds e to its compensation: ds times a float factor near 1 rounded by up to ulp/2 of ds in the same
+ * direction every cycle of a cruise (7e-5 mm over a 320 mm piece, a step where it ended).
+ * Float: every whole cycle's travel is dt times the cycle's mean rate (interp.c, phase_step), summed compensated; the
+ * phase clock is tau0 + n dt (no summed drift); arc anchors take the angle as an exact sum (arc_point). Each setpoint
+ * is then within a few ulp of the largest coordinate of the exact curve (tests/common/float_noise.h: K = 4).
  * When a piece ends between two samples, the next one is planned at once and sampled at the rest of the cycle.
  * Replanning happens only where a = 0: at samples in cruises and at ramp starts, and exactly at the end of a
  * ramp (between two samples: the new piece is sampled at the rest of the cycle). There the interpolator takes a
@@ -129,21 +135,27 @@ typedef struct lsm_interp {
     uint16_t anchor;       /* cycles since the arc was re-anchored */
     uint32_t gen;          /* planner generation of pc */
     lsm_real tau;          /* time into the current phase at the last sample */
+    lsm_real tau0;         /* float: tau = tau0 + tau_n dt (one rounding per sample, no drift), tau0 the ... */
+    uint32_t tau_n;        /* ... phase-local time of the sample the count started at, tau_n the cycles since */
     lsm_real sloc;         /* travel into the current phase at the last sample */
+    lsm_real sloc_lo;      /* float: what the additions to sloc rounded off (a cruise advances by v dt, compensated) */
     lsm_real rc, rs;       /* cos, sin of pi tau / T in a sin² phase (rotation recurrence) */
     lsm_real ce[2], se[2]; /* per ramp (A, B): cos, sin of pi e / T1 at a phase entry (e: entry offset) */
     lsm_real ee[2];        /* per ramp: e, the time from a phase start to its first sample, in [0, dt) */
     lsm_real cd[2], sd[2]; /* per ramp: cos, sin of pi / n1 (one cycle) */
+    lsm_real nx_cd[2];     /* cd and sd of the piece planned ahead: computed where it is planned, ... */
+    lsm_real nx_sd[2];     /* ... not in the cycle that takes it */
+    lsm_real nx_sum[2];    /* float: the sum of that piece's phase lengths, hi + lo (exact) */
     lsm_real v_mm_s;       /* feed at the last sample */
     uint32_t act_blk;      /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
     uint8_t act_ok;
     uint8_t reserved[3];
-    uint32_t blk;       /* path cursor: block id ... */
-    lsm_real off_mm;    /* ... and offset in it */
-    lsm_real ds_scale;  /* float: the piece's length over the sum of its phases (ds is scaled by it) */
-    lsm_real off_lo_mm; /* float: what the additions to off_mm rounded off (compensated sum: the cursor
+    uint32_t blk;        /* path cursor: block id ... */
+    lsm_real off_mm;     /* ... and offset in it */
+    lsm_real ds_stretch; /* float: (len - sum) / sum of the piece's phases: the travel is ds (1 + ds_stretch) */
+    lsm_real off_lo_mm;  /* float: what the additions to off_mm rounded off (compensated sum: the cursor
                                     keeps the exact sum of the travel, no drift to snap back at a piece's end) */
-    uint32_t hz_blk;    /* end of the current ramp (commitment horizon) */
+    uint32_t hz_blk;     /* end of the current ramp (commitment horizon) */
     lsm_real hz_off;
     lsm_real hz_v;                           /* speed there (a = 0) */
     lsm_real aw;                             /* arc: dphi/ds */

@@ -11,8 +11,9 @@
  *                  exceeds them. The float build checks order 1 only (PP_CHECK_DIFF_ORDER): the rounding of float
  *                  positions, 2^n ulp(|p|) / dt^n, is above the limits from order 2 on at 1 ms.
  * Noise bounds, no tolerance: the own state PP_NOISE_ULPS ulps of the real type relative to each limit's scale (the
- * closed-form states carry a few roundings of quantities of that size); a difference of order n: 2^n PP_POS_ULPS
- * ulps of the largest |position| seen, over dt^n (each position is within PP_POS_ULPS of the exact curve).
+ * closed-form states carry a few roundings of quantities of that size); a difference of order n: float_noise.h's
+ * bound, 2^n K u / dt^n, u the ulp unit of the largest |position| seen (each position is within K u of the exact
+ * curve; K = FLOAT_NOISE_POS_ULPS, derived and measured there, the same bound as the path fuzz targets').
  * The same bounds hold for every cycle, in a planned move or not, in both builds: in a move's cruise the velocity of
  * the demand is the planned cruise feed, which the ramps' evaluated ends meet within a few ulps (firmware/profile/
  * move.c, eval_phase), and the rounding of the float positions of the two ramp ends stays in the positions (within
@@ -27,11 +28,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "float_noise.h"
 #include "lsm_config.h"
 #include "scurve.h"
 
 #define PP_NOISE_ULPS 8.0
-#define PP_POS_ULPS 4.0
+#define PP_POS_ULPS FLOAT_NOISE_POS_ULPS /* K of float_noise.h (the name the motion tests' comments use) */
 #if LSM_REAL_IS_FLOAT
 #define PP_ULP_REL ((double)FLT_EPSILON)
 #define PP_CHECK_DIFF_ORDER 1
@@ -92,7 +94,6 @@ static inline void pp_check_diffs(pp_checker *c)
     double d[5];
     for (unsigned i = 0; i < c->np; i++)
         d[i] = c->p[i];
-    const double ulp = PP_ULP_REL * c->pmax;
     double dtn = 1;
     for (unsigned n = 1; n <= (unsigned)PP_CHECK_DIFF_ORDER && n < c->np; n++) {
         for (unsigned i = 0; i + n < c->np; i++)
@@ -100,7 +101,7 @@ static inline void pp_check_diffs(pp_checker *c)
         dtn *= c->dt;
         if (n == 4 && !(c->S > 0))
             break;
-        const double noise = ldexp(PP_POS_ULPS * ulp, (int)n) / dtn;
+        const double noise = float_noise_diff(c->pmax, (int)n, c->dt);
         pp_check_note(c, 5 + (int)n, d[0] / dtn, L[n - 1] + noise, names[n - 1]);
     }
 }

@@ -6,8 +6,9 @@
  * look-ahead, so the buffer wraps), and checks each setpoint as it comes:
  *   nan       every setpoint is finite;
  *   limit     per axis, |dq|/dt, |d²q|/dt², |d³q|/dt³ (backward differences from rest, Beudaert eq 6) within
- *             1e-6 relative of the axis limit, plus in float the rounding of float positions (2, 4, 8 ulp of
- *             the largest coordinate over dt, dt², dt³: the bound of tests/plan/test_planner.c);
+ *             1e-6 relative of the axis limit, plus in float the noise of float positions (tests/common/
+ *             float_noise.h: 2^n K u / dt^n, each setpoint within K = 4 ulp of the largest coordinate of the exact
+ *             curve, derived and measured there; FZ_MEASURE=1 measures it, fz_measure.h);
  *   end       the last setpoint is the programmed end exactly (the end rounded to lsm_real);
  *   crawl     the run ends within 4 x a generous time bound (every block a rest-to-rest move at a speed capped
  *             by the feed, the slowest axis and, on arcs, the centripetal a, j and snap caps, halved) + 0.5 s;
@@ -30,10 +31,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "float_noise.h"
 #include "interp.h"
 #include "planner.h"
 
 #define FZ_AXES 3
+#include "fz_measure.h"
 #define FZ_CAPACITY 24u            /* look-ahead storage: small, so that the ring wraps and runs low */
 #define FZ_MAX_EST_S 30.0          /* inputs whose time bound is longer are skipped (not interesting, slow) */
 #define FZ_MAX_EST_CYCLES 150000.0 /* ... and so are those with more cycles than this */
@@ -141,12 +144,14 @@ typedef struct fz_run {
     long idle_cycles; /* cycles at rest by request (HELD) or for want of blocks (IDLE): not counted as crawl */
     lsm_interp_state state;
     int limit_reported;
+    fz_meas ms; /* FZ_MEASURE: the float noise measurement (fz_measure.h) */
 } fz_run;
 
 static void fz_run_init(fz_run *r, const fz_machine *m)
 {
     memset(r, 0, sizeof *r);
     r->m = m;
+    r->ms.on = -1;
     lsm_planner_config cfg;
     fz_config(m, &cfg);
     const lsm_real start[LSM_MAX_AXES] = {0};
@@ -159,12 +164,14 @@ static void fz_run_init(fz_run *r, const fz_machine *m)
     r->span = 1.0;
 }
 
+/* The float setpoints' noise in the n-th difference over dt^n: tests/common/float_noise.h (each setpoint within
+ * K u of the exact curve, u = FLT_EPSILON x the largest |coordinate| seen). The double build is checked without
+ * noise (its rounding is far below the relative slack, and every input passes so). */
 static double fz_noise(const fz_run *r, int order)
 {
     if (!LSM_REAL_IS_FLOAT)
         return 0;
-    const double ulp = r->span * 1.2e-7, k = order == 1 ? 2 : order == 2 ? 4 : 8;
-    return k * ulp / pow(r->m->cycle_s, order);
+    return float_noise_diff(r->span, order, r->m->cycle_s);
 }
 
 /* Checks the newest setpoint (r->q[0]) against the limits. */
@@ -207,6 +214,7 @@ static lsm_interp_state fz_step(fz_run *r)
     if (r->state == LSM_INTERP_HELD || r->state == LSM_INTERP_IDLE)
         r->idle_cycles++;
     fz_check_diffs(r);
+    fz_measure_step(&r->ms, &r->ip, &r->pl, r->q, r->span, r->m->cycle_s, r->m->v, r->m->a, r->m->j);
     return r->state;
 }
 
@@ -244,6 +252,7 @@ static void fz_run_out(fz_run *r, double est_s, const lsm_real end[FZ_AXES])
                      (double)end[a], r->q[0][a] - (double)end[a]);
             break;
         }
+    fz_measure_report(&r->ms, r->m->name, r->span);
     if (getenv("FZ_VERBOSE"))
         fprintf(stderr, "fuzz: machine %s, %ld cycles (%ld at rest), end %g %g %g, bound %.3f s\n", r->m->name,
                 r->cycles, r->idle_cycles, r->q[0][0], r->q[0][1], r->q[0][2], bound_s);

@@ -216,6 +216,7 @@ static void activate(lsm_interp *ip)
     if (b == NULL)
         return;
     ip->act_blk = ip->blk;
+    ip->act_b = b;
     ip->act_ok = 1;
     const lsm_geom *g = &b->g;
     ip->gkind = g->kind;
@@ -271,11 +272,15 @@ static void advance_path(lsm_interp *ip, lsm_real ds, lsm_real ds_lo)
         ds_lo = R0;
     }
     const lsm_planner *pl = ip->pl;
-    const lsm_pblock *b = bk(ip, ip->blk);
-    if (b == NULL)
-        return;
-    if (!ip->act_ok || ip->act_blk != ip->blk)
+    const lsm_pblock *b;
+    if (ip->act_ok && ip->act_blk == ip->blk) {
+        b = ip->act_b; /* the block set up at the cursor: still live (interp.h, act_b), no lookup */
+    } else {
+        b = bk(ip, ip->blk);
+        if (b == NULL)
+            return;
         activate(ip); /* (re)started on a block that was never set up */
+    }
 #if LSM_REAL_IS_FLOAT
     {
         const lsm_real y = ds + (ip->off_lo_mm + ds_lo), t = ip->off_mm + y;

@@ -150,6 +150,9 @@ typedef struct lsm_interp {
     uint32_t act_blk;      /* the block whose geometry state (arc rotation, clothoid stepper) is set up */
     uint8_t act_ok;
     uint8_t reserved[3];
+    /* act_b: that block (act_ok), live while the cursor is on it (only the interpolator releases blocks, and only
+     * those before the cursor): the cycle needs no lookup */
+    const lsm_pblock *act_b;
     uint32_t blk;        /* path cursor: block id ... */
     lsm_real off_mm;     /* ... and offset in it */
     lsm_real ds_stretch; /* float: (len - sum) / sum of the piece's phases: the travel is ds (1 + ds_stretch) */

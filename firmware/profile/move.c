@@ -436,19 +436,7 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
 }
 
 /* How far from the sized T1 (cycles) widest_of_total looks: the sizing's n1 is near the best for its total. */
-#define WIDEST_N1_SPAN 4u
-
-/* The velocity capacity of intervals (n1, n2) completed with n4 to the total t (cycles); -1 if they exceed it. */
-static lsm_real capacity_at(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t, uint32_t n1, uint32_t n2,
-                            lsm_scurve_intervals *iv)
-{
-    if (4u * n1 + 2u * n2 > t)
-        return -1;
-    iv->n1_cycles = n1;
-    iv->n2_cycles = n2;
-    iv->n4_cycles = t - 4u * n1 - 2u * n2;
-    return lsm_scurve_dv_capacity(sl, dt, iv);
-}
+#define WIDEST_N1_SPAN 2u
 
 /*
  * The intervals of the same total as *iv with the largest velocity capacity (into *iv). Several intervals share
@@ -457,7 +445,7 @@ static lsm_real capacity_at(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t
  * (eq (1) of move.h), so only the capacity decides whether the ramps hold it. For fixed n1 the capacity is
  * min(Jc den, A den / (t1 + t2)) with Jc = min(Jmax, 2 t1 DJmax / pi) and den (eq 34) rising in n2 while
  * den / (t1 + t2) = (T - 2 n1 - n2) dt falls: the best n2 is on either side of t1 + t2 = A / Jc. n1 is scanned
- * within WIDEST_N1_SPAN of the given one.
+ * within WIDEST_N1_SPAN of the given one. Only a choice: window_nc checks the limits exactly.
  */
 static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve_intervals *iv)
 {
@@ -472,15 +460,13 @@ static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve
         const lsm_real jc = lsm_min2(sl->j_max_mm_s3, 2 * t1 * sl->snap_max_mm_s4 / (lsm_real)LSM_PI);
         const lsm_real u = sl->a_max_mm_s2 / (jc * dt) - (lsm_real)n1; /* the crossing's n2 (real) */
         const uint32_t n2_top = (t - 4u * n1) / 2u;
-        uint32_t n2s[2] = {0, 0};
-        if (u > 0) {
-            const lsm_real f = lsm_floor(u);
-            n2s[0] = f < (lsm_real)n2_top ? (uint32_t)f : n2_top;
-            n2s[1] = n2s[0] < n2_top ? n2s[0] + 1 : n2_top;
-        }
-        for (int k = 0; k < 2; k++) {
-            lsm_scurve_intervals c;
-            const lsm_real cap = capacity_at(sl, dt, t, n1, n2s[k], &c);
+        uint32_t n2 = 0;
+        if (u > 0)
+            n2 = u < (lsm_real)n2_top ? (uint32_t)u : n2_top;
+        for (uint32_t k = 0; k < 2 && n2 + k <= n2_top; k++) {
+            const lsm_scurve_intervals c = {n1, n2 + k, t - 4u * n1 - 2u * (n2 + k)};
+            const lsm_real t12 = t1 + (lsm_real)c.n2_cycles * dt;
+            const lsm_real cap = lsm_min2(jc, sl->a_max_mm_s2 / t12) * lsm_scurve_jerk_den(&c, dt);
             if (cap > best) {
                 best = cap;
                 *iv = c;
@@ -564,15 +550,28 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
         if (!ramp(L, dt, p - v0, LSM_SCURVE_RULE_STRICT, &base.acc) ||
             !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
             return LSM_E_TOO_LONG;
+        /* the same totals' widest intervals (sized once per candidate), tried where the sizing's own fail */
+        const lsm_scurve_limits sl = ramp_limits(L);
+        shape wide = base;
+        widest_of_total(&sl, dt, &wide.acc);
+        widest_of_total(&sl, dt, &wide.dec);
+        const bool wider = !(iv_equal(&wide.acc, &base.acc) && iv_equal(&wide.dec, &base.dec));
         for (int sa = 0; sa < 4; sa++) {
             for (int sd = 0; sd < 4; sd++) {
-                shape sh = base;
-                if ((stretch[sa] && !sh.acc.n1_cycles) || (stretch[sd] && !sh.dec.n1_cycles))
+                if ((stretch[sa] && !base.acc.n1_cycles) || (stretch[sd] && !base.dec.n1_cycles))
                     continue;
+                shape sh = base;
                 sh.acc.n4_cycles += stretch[sa];
                 sh.dec.n4_cycles += stretch[sd];
-                if (!window_nc_wide(L, dt, D, v0, v1, &sh))
-                    continue;
+                if (!window_nc(L, dt, D, v0, v1, &sh)) {
+                    if (!wider)
+                        continue;
+                    sh = wide;
+                    sh.acc.n4_cycles += stretch[sa];
+                    sh.dec.n4_cycles += stretch[sd];
+                    if (!window_nc(L, dt, D, v0, v1, &sh))
+                        continue;
+                }
                 const uint64_t total =
                     (uint64_t)lsm_scurve_total_cycles(&sh.acc) + lsm_scurve_total_cycles(&sh.dec) + sh.nc;
                 if (total < best_total) {

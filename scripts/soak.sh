@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
 done
 
 VC_CHUNK=200000      # velocity changes per process (about 70 s of CPU)
-PATH_CHUNK=120       # random paths per process (12 scenarios x 10; about 2 min of CPU)
+PATH_CHUNK=120       # random paths per process (12 scenarios x 10; about 2 s of CPU)
 FIX_CHUNK=20000      # fixstep moves per process
 
 cmake --preset host >/dev/null || exit 1

@@ -215,6 +215,17 @@ static lsm_status check_append(const lsm_planner *pl, const lsm_planner_move *mv
     return LSM_OK;
 }
 
+/* The last check of an append, then its start: an axis outside the mask must stay where it is (the first n_axes
+ * of end); the call begins, and the block the call before held is pushed first (it was checked then). */
+static lsm_status begin_append(lsm_planner *pl, const lsm_real *end, int n_axes)
+{
+    for (int i = 0; i < n_axes; i++)
+        if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
+            return LSM_E_PL_AXIS;
+    call_begin(pl);
+    return push_held(pl);
+}
+
 lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_AXES], const lsm_planner_move *mv)
 {
     if (end == NULL)
@@ -226,11 +237,7 @@ lsm_status lsm_planner_append_line(lsm_planner *pl, const lsm_real end[LSM_MAX_A
     st = lsm_pl_check_vals(end, LSM_MAX_AXES);
     if (st != LSM_OK)
         return st;
-    for (int i = 0; i < LSM_MAX_AXES; i++)
-        if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
-            return LSM_E_PL_AXIS;
-    call_begin(pl);
-    st = push_held(pl); /* (the block the call before held: it was checked then) */
+    st = begin_append(pl, end, LSM_MAX_AXES);
     if (st != LSM_OK)
         return st;
     /* the line starts at the last point held for fitting, or at the end of the last block */
@@ -261,11 +268,7 @@ lsm_status lsm_planner_append_arc(lsm_planner *pl, const lsm_real end[3], const 
         st = lsm_pl_check_vals(centre, 3);
     if (st != LSM_OK)
         return st;
-    for (int i = 0; i < 3; i++)
-        if (!(pl->cfg.axis_mask & (1u << i)) && end[i] != pl->tail_pos[i])
-            return LSM_E_PL_AXIS;
-    call_begin(pl);
-    st = push_held(pl); /* (the block the call before held: it was checked then) */
+    st = begin_append(pl, end, 3);
     if (st != LSM_OK)
         return st;
     lsm_real pe[LSM_MAX_AXES];

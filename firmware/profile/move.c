@@ -435,6 +435,61 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
     return false;
 }
 
+/* How far from the sized T1 (cycles) widest_of_total looks: the sizing's n1 is near the best for its total. */
+#define WIDEST_N1_SPAN 2u
+
+/*
+ * The intervals of the same total as *iv with the largest velocity capacity (into *iv). Several intervals share
+ * a total (n1, n2 and n4 traded against each other) and the sizing takes the shortest for its velocity change, not
+ * the one that carries the most; with the totals fixed, the cruise feed of every cruise length is fixed too
+ * (eq (1) of move.h), so only the capacity decides whether the ramps hold it. For fixed n1 the capacity is
+ * min(Jc den, A den / (t1 + t2)) with Jc = min(Jmax, 2 t1 DJmax / pi) and den (eq 34) rising in n2 while
+ * den / (t1 + t2) = (T - 2 n1 - n2) dt falls: the best n2 is on either side of t1 + t2 = A / Jc. n1 is scanned
+ * within WIDEST_N1_SPAN of the given one. Only a choice: window_nc checks the limits exactly.
+ */
+static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve_intervals *iv)
+{
+    if (iv->n1_cycles == 0)
+        return;
+    const uint32_t t = lsm_scurve_total_cycles(iv);
+    lsm_real best = lsm_scurve_dv_capacity(sl, dt, iv);
+    const uint32_t n1_lo = iv->n1_cycles > WIDEST_N1_SPAN ? iv->n1_cycles - WIDEST_N1_SPAN : 1;
+    const uint32_t n1_hi = iv->n1_cycles + WIDEST_N1_SPAN;
+    for (uint32_t n1 = n1_lo; n1 <= n1_hi && 4u * n1 <= t; n1++) {
+        const lsm_real t1 = (lsm_real)n1 * dt;
+        const lsm_real jc = lsm_min2(sl->j_max_mm_s3, 2 * t1 * sl->snap_max_mm_s4 / (lsm_real)LSM_PI);
+        const lsm_real u = sl->a_max_mm_s2 / (jc * dt) - (lsm_real)n1; /* the crossing's n2 (real) */
+        const uint32_t n2_top = (t - 4u * n1) / 2u;
+        uint32_t n2 = 0;
+        if (u > 0)
+            n2 = u < (lsm_real)n2_top ? (uint32_t)u : n2_top;
+        for (uint32_t k = 0; k < 2 && n2 + k <= n2_top; k++) {
+            const lsm_scurve_intervals c = {n1, n2 + k, t - 4u * n1 - 2u * (n2 + k)};
+            const lsm_real t12 = t1 + (lsm_real)c.n2_cycles * dt;
+            const lsm_real cap = lsm_min2(jc, sl->a_max_mm_s2 / t12) * lsm_scurve_jerk_den(&c, dt);
+            if (cap > best) {
+                best = cap;
+                *iv = c;
+            }
+        }
+    }
+}
+
+/* window_nc, and if it finds no cruise length, again with each ramp's widest intervals of the same totals. */
+static bool window_nc_wide(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *sh)
+{
+    if (window_nc(L, dt, D, v0, v1, sh))
+        return true;
+    const lsm_scurve_limits sl = ramp_limits(L);
+    shape w = *sh;
+    widest_of_total(&sl, dt, &w.acc);
+    widest_of_total(&sl, dt, &w.dec);
+    if ((iv_equal(&w.acc, &sh->acc) && iv_equal(&w.dec, &sh->dec)) || !window_nc(L, dt, D, v0, v1, &w))
+        return false;
+    *sh = w;
+    return true;
+}
+
 /* The fallback's cruise-feed candidates (see single_plan). */
 #define ALT_ABOVE 4 /* peaks between vp* and v_max */
 #define ALT_GRID 32 /* an even grid of feeds from max(v0, v1) down to 0 */
@@ -477,14 +532,14 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
     lsm_status st = strict_peak_shape(L, dt, D, v0, v1, best);
     if (st != LSM_OK)
         return st;
-    if (window_nc(L, dt, D, v0, v1, best))
+    if (window_nc_wide(L, dt, D, v0, v1, best))
         return LSM_OK;
     /* the fallback starts from single_shape's peak (and its shape, which may also fit) */
     lsm_real vp;
     st = single_shape(L, dt, D, v0, v1, LSM_SCURVE_RULE_STRICT, best, &vp);
     if (st != LSM_OK)
         return st;
-    if (window_nc(L, dt, D, v0, v1, best))
+    if (window_nc_wide(L, dt, D, v0, v1, best))
         return LSM_OK;
     uint64_t best_total = UINT64_MAX;
     /* a ramp lengthened at T4 gains velocity capacity linearly, at a small cost in time */
@@ -495,15 +550,28 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
         if (!ramp(L, dt, p - v0, LSM_SCURVE_RULE_STRICT, &base.acc) ||
             !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
             return LSM_E_TOO_LONG;
+        /* the same totals' widest intervals (sized once per candidate), tried where the sizing's own fail */
+        const lsm_scurve_limits sl = ramp_limits(L);
+        shape wide = base;
+        widest_of_total(&sl, dt, &wide.acc);
+        widest_of_total(&sl, dt, &wide.dec);
+        const bool wider = !(iv_equal(&wide.acc, &base.acc) && iv_equal(&wide.dec, &base.dec));
         for (int sa = 0; sa < 4; sa++) {
             for (int sd = 0; sd < 4; sd++) {
-                shape sh = base;
-                if ((stretch[sa] && !sh.acc.n1_cycles) || (stretch[sd] && !sh.dec.n1_cycles))
+                if ((stretch[sa] && !base.acc.n1_cycles) || (stretch[sd] && !base.dec.n1_cycles))
                     continue;
+                shape sh = base;
                 sh.acc.n4_cycles += stretch[sa];
                 sh.dec.n4_cycles += stretch[sd];
-                if (!window_nc(L, dt, D, v0, v1, &sh))
-                    continue;
+                if (!window_nc(L, dt, D, v0, v1, &sh)) {
+                    if (!wider)
+                        continue;
+                    sh = wide;
+                    sh.acc.n4_cycles += stretch[sa];
+                    sh.dec.n4_cycles += stretch[sd];
+                    if (!window_nc(L, dt, D, v0, v1, &sh))
+                        continue;
+                }
                 const uint64_t total =
                     (uint64_t)lsm_scurve_total_cycles(&sh.acc) + lsm_scurve_total_cycles(&sh.dec) + sh.nc;
                 if (total < best_total) {

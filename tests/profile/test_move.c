@@ -6,6 +6,7 @@
  * max(v0, v1) nor the coarse grid of cruise feeds fits; the exact shapes linger at a cruise feed close to an
  * end feed. Each must plan, keep every limit (analytic peaks of both ramps, the cruise under v_max), end
  * exactly on D with feed v1, and take no more cycles than an independent witness shape found by brute force.
+ * (A third kind: the ramps' totals admit an exact cruise only with other intervals of the same totals.)
  *
  * The peak search (test_peak_search_matches_bisection): from rest to rest, the move's ramps have the totals of the
  * largest peak that a plain bisection finds.
@@ -40,6 +41,11 @@ static const refused_case CASES[] = {
     /* seed 1001 case 17123 */
     {-0.22738947365912424, 3.3216866485971086, 6.2196181694227013, 7.5313261694312867, 85.083428289161873,
      153954.73983474151, 14238792.994125878, 0.002, 25},
+    /* seed 7110 case 21953: a descent through a feed below v0 (acc 10 and dec 7 cycles, no cruise). It fits only
+     * with the intervals of the largest velocity capacity for those totals, e.g. (1, 0, 3) for the 7 cycles, not
+     * the sizing's own (1, 1, 1) of the same total (capacity 0.55 < vc - v1 = 0.565 mm/s) */
+    {-0.15674663382399084, 9.9821965588934045, 8.502783040753183, 11.19978396929355, 137.95068201070123,
+     1753914.6223192604, 192719528.80731311, 0.001, 17},
 };
 
 static void check_ramp(const lsm_scurve_intervals *iv, double jp, const lsm_axis_limits *L, double dt)

@@ -465,8 +465,7 @@ static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve
             n2 = u < (lsm_real)n2_top ? (uint32_t)u : n2_top;
         for (uint32_t k = 0; k < 2 && n2 + k <= n2_top; k++) {
             const lsm_scurve_intervals c = {n1, n2 + k, t - 4u * n1 - 2u * (n2 + k)};
-            const lsm_real t12 = t1 + (lsm_real)c.n2_cycles * dt;
-            const lsm_real cap = lsm_min2(jc, sl->a_max_mm_s2 / t12) * lsm_scurve_jerk_den(&c, dt);
+            const lsm_real cap = lsm_scurve_dv_capacity(sl, dt, &c);
             if (cap > best) {
                 best = cap;
                 *iv = c;
@@ -475,16 +474,23 @@ static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve
     }
 }
 
+/* *w: sh with each ramp's widest intervals of the same totals (widest_of_total); false if that is sh itself. */
+static bool widest_shape(const lsm_axis_limits *L, lsm_real dt, const shape *sh, shape *w)
+{
+    const lsm_scurve_limits sl = ramp_limits(L);
+    *w = *sh;
+    widest_of_total(&sl, dt, &w->acc);
+    widest_of_total(&sl, dt, &w->dec);
+    return !(iv_equal(&w->acc, &sh->acc) && iv_equal(&w->dec, &sh->dec));
+}
+
 /* window_nc, and if it finds no cruise length, again with each ramp's widest intervals of the same totals. */
 static bool window_nc_wide(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *sh)
 {
     if (window_nc(L, dt, D, v0, v1, sh))
         return true;
-    const lsm_scurve_limits sl = ramp_limits(L);
-    shape w = *sh;
-    widest_of_total(&sl, dt, &w.acc);
-    widest_of_total(&sl, dt, &w.dec);
-    if ((iv_equal(&w.acc, &sh->acc) && iv_equal(&w.dec, &sh->dec)) || !window_nc(L, dt, D, v0, v1, &w))
+    shape w;
+    if (!widest_shape(L, dt, sh, &w) || !window_nc(L, dt, D, v0, v1, &w))
         return false;
     *sh = w;
     return true;
@@ -551,11 +557,8 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
             !ramp(L, dt, p - v1, LSM_SCURVE_RULE_STRICT, &base.dec))
             return LSM_E_TOO_LONG;
         /* the same totals' widest intervals (sized once per candidate), tried where the sizing's own fail */
-        const lsm_scurve_limits sl = ramp_limits(L);
-        shape wide = base;
-        widest_of_total(&sl, dt, &wide.acc);
-        widest_of_total(&sl, dt, &wide.dec);
-        const bool wider = !(iv_equal(&wide.acc, &base.acc) && iv_equal(&wide.dec, &base.dec));
+        shape wide;
+        const bool wider = widest_shape(L, dt, &base, &wide);
         for (int sa = 0; sa < 4; sa++) {
             for (int sd = 0; sd < 4; sd++) {
                 if ((stretch[sa] && !base.acc.n1_cycles) || (stretch[sd] && !base.dec.n1_cycles))

@@ -112,14 +112,29 @@ typedef struct lsm_interp_prep {
     uint32_t blk;    /* where it starts (block id, offset) and its speed there */
     lsm_real off_mm;
     lsm_real v_mm_s;
-    uint8_t kind;   /* lsm_interp_switch */
-    uint8_t phase;  /* SW_BOUNDARY */
-    uint8_t ready;  /* the second piece buffer holds the piece */
-    uint8_t failed; /* no piece fits at this switch point for this generation (do not try again) */
-    uint8_t mode;   /* lsm_piece_mode it was planned with */
-    uint8_t reserved[3];
+    uint8_t kind;       /* lsm_interp_switch */
+    uint8_t phase;      /* SW_BOUNDARY */
+    uint8_t ready;      /* the second piece buffer holds the piece */
+    uint8_t failed;     /* no piece fits at this switch point for this generation (do not try again) */
+    uint8_t mode;       /* lsm_piece_mode it was planned with */
+    uint8_t skip_phase; /* SW_BOUNDARY: boundary skip_phase (before `phase`) of the same piece failed in mode skip_mode
+                           for this generation, and the slot holds the piece needed after it (0: none) */
+    uint8_t skip_mode;
+    uint8_t reserved;
     uint32_t stale_seen; /* the planner's invalidation count when it was planned (lsm_planner_stale_count) */
 } lsm_interp_prep;
+
+/* Why lsm_interp_step planned a piece itself (lsm_interp.tick_cause[], which add up to tick_plans). With
+ * lsm_interp_prepare called before every step and nothing requested between the two, only TP_SHORT can occur. */
+typedef enum lsm_interp_tick_cause {
+    LSM_INTERP_TP_NO_PREPARE = 0, /* lsm_interp_prepare is not in use: the step plans every piece */
+    LSM_INTERP_TP_LATE = 1,       /* since the last lsm_interp_prepare the plan changed (an append, an override), a
+                                     piece was invalidated, a hold or resume was requested, or a step ran without one */
+    LSM_INTERP_TP_SHORT = 2,      /* the successor of a piece that started and ended inside the same cycle: the one
+                                     slot held that piece when the background ran */
+    LSM_INTERP_TP_MISSED = 3,     /* none of these: a piece the background should have prepared (a defect) */
+    LSM_INTERP_TP_CAUSES = 4
+} lsm_interp_tick_cause;
 
 typedef struct lsm_interp {
     lsm_planner *pl;
@@ -177,8 +192,17 @@ typedef struct lsm_interp {
     uint8_t bg;              /* lsm_interp_prepare is in use: the cycle plans only what it must */
     uint8_t hz_posted_phase; /* the phase of the current piece whose horizon was posted whole (HZ_NOT_POSTED: none) */
     uint8_t reserved2[2];
-    uint32_t prepared;    /* pieces planned by lsm_interp_prepare */
-    lsm_interp_prep prep; /* the slot of lsm_interp_prepare */
+    uint32_t prepared;                         /* pieces planned by lsm_interp_prepare */
+    lsm_interp_prep prep;                      /* the slot of lsm_interp_prepare */
+    uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (lsm_interp_tick_cause) */
+    /* what the last lsm_interp_prepare saw, for TP_LATE: the step count, planner generation, invalidation count
+     * and hold request then */
+    uint64_t bg_cycles;
+    uint32_t bg_gen;
+    uint32_t bg_stale;
+    uint8_t bg_hold;
+    uint8_t took; /* a piece was taken in the current step (TP_SHORT) */
+    uint8_t reserved3[2];
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */

@@ -254,6 +254,7 @@ typedef struct run_res {
     long held_cycles;
     uint32_t fallbacks, underruns;
     uint32_t tick_plans, prepared;
+    uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
 } run_res;
 
 static double dist_geom(const lsm_geom *g, const double x[3])
@@ -407,6 +408,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     }
     r->fallbacks = pl.stats.plan_fallbacks;
     r->tick_plans = ip.tick_plans;
+    for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+        r->tick_cause[i] = ip.tick_cause[i];
     r->prepared = ip.prepared;
     if (!r->done && getenv("TEST_DUMP"))
         print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u "
@@ -520,6 +523,31 @@ static void check_run(const prog *p, const run_res *r, const char *what, long c)
         fail_msg("%s %ld (seed %lu): %u fallback pieces", what, c, g_seed, r->fallbacks);
 }
 
+/* Pieces planned inside the cycle, per program: each has a cause (interp.h, lsm_interp_tick_cause). Without
+ * lsm_interp_prepare every piece is planned there (cause NO_PREPARE) and none is prepared. With it, called before every
+ * step and nothing requested between the two, the only allowed cause is TP_SHORT (the successor of a piece that
+ * started and ended inside one cycle: the one slot held that piece). */
+static void check_tick_plans(const run_res *r, int no_prepare, const char *what, long c)
+{
+    uint32_t sum = 0;
+    for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+        sum += r->tick_cause[i];
+    if (sum != r->tick_plans)
+        fail_msg("%s %ld (seed %lu): %u pieces planned in the cycle, %u by cause", what, c, g_seed, r->tick_plans, sum);
+    if (no_prepare) {
+        if (r->prepared != 0 || r->tick_cause[LSM_INTERP_TP_NO_PREPARE] != r->tick_plans)
+            fail_msg("%s %ld (seed %lu): without lsm_interp_prepare %u pieces prepared, %u of %u planned in the "
+                     "cycle as such",
+                     what, c, g_seed, r->prepared, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_plans);
+        return;
+    }
+    if (r->tick_plans != r->tick_cause[LSM_INTERP_TP_SHORT])
+        fail_msg("%s %ld (seed %lu): pieces planned in the cycle: no prepare %u, late %u, missed %u (and %u after a "
+                 "piece shorter than a cycle)",
+                 what, c, g_seed, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_cause[LSM_INTERP_TP_LATE],
+                 r->tick_cause[LSM_INTERP_TP_MISSED], r->tick_cause[LSM_INTERP_TP_SHORT]);
+}
+
 static uint64_t rng(int salt)
 {
     return 0x9E3779B97F4A7C15ull ^ ((uint64_t)g_seed * 0x100000001B3ull) ^ (uint64_t)salt;
@@ -529,7 +557,7 @@ static void scenario(int kind, const char *name, int mode)
 {
     uint64_t rs = rng(kind * 131 + mode);
     static prog p;
-    long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0;
+    long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0, cause[LSM_INTERP_TP_CAUSES] = {0};
     for (long c = 0; c < g_count; c++) {
         gen(&p, &rs, kind);
         if (p.n == 0)
@@ -556,6 +584,9 @@ static void scenario(int kind, const char *name, int mode)
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
+        check_tick_plans(&r, o.no_prepare, name, c);
+        for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+            cause[i] += r.tick_cause[i];
         if ((mode == 1 || mode == 4 || mode == 6) && r.held_cycles > 0) {
             held++;
             if (r.held_motion != 0)
@@ -567,13 +598,10 @@ static void scenario(int kind, const char *name, int mode)
         ok++;
         free(r.q);
     }
-    print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle\n",
-                  name, ok, held, underruns, prepared, tick_plans);
-    /* with lsm_interp_prepare before every cycle, the cycle plans only pieces that follow one shorter than a cycle */
-    if ((mode < 4 || mode >= 6) && tick_plans * 100 > prepared)
-        fail_msg("%s: %ld of %ld pieces planned inside the cycle", name, tick_plans, prepared);
-    if ((mode == 4 || mode == 5) && prepared != 0)
-        fail_msg("%s: %ld pieces prepared without lsm_interp_prepare", name, prepared);
+    print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle "
+                  "(no prepare %ld, late %ld, short %ld, missed %ld)\n",
+                  name, ok, held, underruns, prepared, tick_plans, cause[LSM_INTERP_TP_NO_PREPARE],
+                  cause[LSM_INTERP_TP_LATE], cause[LSM_INTERP_TP_SHORT], cause[LSM_INTERP_TP_MISSED]);
     assert_true(ok > 0);
 }
 

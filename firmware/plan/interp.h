@@ -51,8 +51,18 @@
  * it was planned for; lsm_interp_step takes it when it reaches that point. Called between cycles (from the
  * background, or before each step in a synchronous loop), it leaves the control cycle with no planning: the cycle
  * only evaluates. A cycle that reaches a switch point where a piece is needed and none is prepared plans it itself
- * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans; callers that prepare see 0.
- * Pieces planned ahead of a switch point at lead_cycles > 0 leave the background that many cycles to finish.
+ * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans, by cause (tick_cause[],
+ * lsm_interp_tick_cause). The background prepares what the step will need, including where a first choice fails:
+ *   - a hold (or replacement) that fits nowhere at the last switch point before the piece's end, when that end comes
+ *     within the same cycle: the successor is planned in the same call (prep.skip_phase remembers the failed point);
+ *   - a stale piece (lsm_planner_piece_stale) that nothing fits in the hold or replan mode where the step must replace
+ *     it (a sample, a ramp's end): the piece planned normally, as the step would;
+ *   - a stale piece waits for its replacement prepared ahead, at a sample (lead_cycles) or at the start of the ramp
+ *     that ends its cruise (a cruise shorter than lead_cycles + 1 cycles), and the step stops at a boundary only for
+ *     a piece of the mode it asks for (a piece left from a hold since cancelled is not taken).
+ * What remains for the step: TP_SHORT (the successor of a piece that started and ended in one cycle, which the one
+ * slot held) and TP_LATE (a request between lsm_interp_prepare and the step). Pieces planned ahead of a switch point
+ * at lead_cycles > 0 leave the background that many cycles to finish.
  *
  * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
  * at once; both through the planner, so every change is a verified sin² ramp (jerk-limited). 0 % is a feed hold.
@@ -77,7 +87,7 @@
  * blocks and the prepared slot, and lsm_interp_prepare reads the step's cursor and pieces, with no hand-off of their
  * own: that is why a step may not preempt the background's calls on the same interpolator, and why the motion layer
  * moves the whole interpolator to the background rather than splitting it. A step that reaches a switch point with
- * no piece prepared plans it itself (tick_plans; 0 when lsm_interp_prepare runs before every step).
+ * no piece prepared plans it itself (tick_plans, tick_cause[]).
  *
  * Units: mm, s, rad.
  */
@@ -215,7 +225,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
 
 /* Background work between cycles: plans the next piece the interpolator will need (see above). Returns LSM_OK (a
  * piece is ready, or nothing is needed), LSM_E_INFEASIBLE (none fits at the next switch point: the current plan
- * stays valid and is followed), LSM_E_NULL. At most one piece plan per call. Background. */
+ * stays valid and is followed), LSM_E_NULL. At most one piece plan per call, two where the first fails and the piece's
+ * end follows within the cycle (its successor: see above). Background. */
 lsm_status lsm_interp_prepare(lsm_interp *ip);
 
 /* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first).

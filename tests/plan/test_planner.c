@@ -736,6 +736,45 @@ static void test_resume_after_underrun(void **state)
     print_message("resume after underrun: stopped at cycle %ld, %ld cycles in all\n", idle_at, n);
 }
 
+/* The cause of a piece planned in the cycle: blocks appended after lsm_interp_prepare ran (at rest, nothing to
+ * prepare then) make the step plan the first piece itself, counted as TP_LATE; with a prepare before every later step,
+ * nothing more is planned in the cycle, and the program runs to its end. */
+static void test_tick_cause_late(void **state)
+{
+    (void)state;
+    lsm_planner_config cfg;
+    config(&cfg);
+    lsm_pblock store[32];
+    lsm_planner pl;
+    lsm_real z[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 32, z), LSM_OK);
+    lsm_interp ip;
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    assert_int_equal(lsm_interp_prepare(&ip), LSM_OK); /* nothing to do yet */
+    const double s = SPAN / 150.0;
+    const double pts[4][2] = {{20 * s, 0}, {30 * s, 8 * s}, {45 * s, 8 * s}, {60 * s, -5 * s}};
+    lsm_planner_move mv = {(lsm_real)(60 * s + 10), (lsm_real)0.02, 0, 0};
+    for (int k = 0; k < 4; k++) {
+        const lsm_real e[LSM_MAX_AXES] = {(lsm_real)pts[k][0], (lsm_real)pts[k][1], 0, 0, 0, 0};
+        assert_int_equal(lsm_planner_append_line(&pl, e, &mv), LSM_OK);
+    }
+    assert_int_equal(lsm_planner_finish(&pl), LSM_OK);
+    lsm_real pos[LSM_MAX_AXES];
+    lsm_interp_state st = lsm_interp_step(&ip, pos); /* no prepare since the appends */
+    assert_int_equal(st, LSM_INTERP_RUN);
+    assert_int_equal(ip.tick_plans, 1u);
+    assert_int_equal(ip.tick_cause[LSM_INTERP_TP_LATE], 1u);
+    for (long k = 0; k < 200000 && st != LSM_INTERP_DONE; k++) {
+        (void)lsm_interp_prepare(&ip);
+        st = lsm_interp_step(&ip, pos);
+    }
+    assert_int_equal(st, LSM_INTERP_DONE);
+    assert_true(pos[0] == (lsm_real)pts[3][0] && pos[1] == (lsm_real)pts[3][1]);
+    assert_int_equal(ip.tick_plans, 1u);
+    assert_int_equal(ip.tick_cause[LSM_INTERP_TP_MISSED] + ip.tick_cause[LSM_INTERP_TP_NO_PREPARE], 0u);
+    assert_true(ip.prepared > 0u);
+}
+
 /* ---------------------------------------------------------------------------------------------------------- */
 /* bad input                                                                                                   */
 
@@ -834,12 +873,13 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_block_size),  cmocka_unit_test(test_bad_blocks),
-        cmocka_unit_test(test_lines),       cmocka_unit_test(test_arcs),
-        cmocka_unit_test(test_mixed),       cmocka_unit_test(test_dense),
-        cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),
-        cmocka_unit_test(test_underrun),    cmocka_unit_test(test_resume_after_underrun),
-        cmocka_unit_test(test_no_prepare),  cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_block_size),      cmocka_unit_test(test_bad_blocks),
+        cmocka_unit_test(test_lines),           cmocka_unit_test(test_arcs),
+        cmocka_unit_test(test_mixed),           cmocka_unit_test(test_dense),
+        cmocka_unit_test(test_hold_resume),     cmocka_unit_test(test_override),
+        cmocka_unit_test(test_underrun),        cmocka_unit_test(test_resume_after_underrun),
+        cmocka_unit_test(test_no_prepare),      cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_tick_cause_late),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

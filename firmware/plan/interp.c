@@ -655,10 +655,9 @@ static uint8_t tick_cause(const lsm_interp *ip, bool successor)
 {
     if (!ip->bg)
         return LSM_INTERP_TP_NO_PREPARE;
-    if (ip->bg_cycles + 1u != ip->cycles || ip->bg_gen != ip->pl->gen ||
-        ip->bg_stale != lsm_planner_stale_count(ip->pl) || ip->bg_hold != ip->hold_req)
-        return LSM_INTERP_TP_LATE;
-    return successor && ip->took ? LSM_INTERP_TP_SHORT : LSM_INTERP_TP_MISSED;
+    if (ip->bg_cycles + 1u != ip->cycles || ip->bg_gen != ip->pl->gen || ip->bg_hold != ip->hold_req)
+        return LSM_INTERP_TP_LATE; /* (a piece is made stale only with a new generation) */
+    return successor && ip->took_cycle == ip->cycles ? LSM_INTERP_TP_SHORT : LSM_INTERP_TP_MISSED;
 }
 
 /* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
@@ -704,9 +703,11 @@ static bool prep_ready(const lsm_interp *ip, uint8_t kind)
 static bool ramp_start_ready(const lsm_interp *ip)
 {
     const uint8_t p = ip->phase;
-    if (!ip->bg || !(p == 0u || p == 8u) || !prep_ready(ip, LSM_INTERP_SW_BOUNDARY))
+    const lsm_interp_prep *q = &ip->prep; /* (prep_ready, written out: a third caller kept it from being inlined) */
+    if (!ip->bg || !(p == 0u || p == 8u) || !q->ready || q->kind != LSM_INTERP_SW_BOUNDARY)
         return false;
-    return ip->prep.phase == p + 1u && ip->prep.mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN);
+    return q->serial == ip->serial && q->gen == ip->pl->gen && q->phase == p + 1u &&
+           q->mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN);
 }
 
 /* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
@@ -714,7 +715,7 @@ static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool 
 {
     const uint32_t g = q->gen;
     ip->prep.ready = 0;
-    ip->took = 1;
+    ip->took_cycle = ip->cycles;
     if (replace)
         ip->replans++;
     ip->gen = g;
@@ -1064,7 +1065,6 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
     lsm_planner *pl = ip->pl;
     const lsm_real dt = pl->cfg.cycle_s;
     ip->cycles++;
-    ip->took = 0;
     if (!ip->running) {
         /* at rest or between pieces: start when there is something to do */
         bool go = false;
@@ -1175,7 +1175,6 @@ lsm_status lsm_interp_prepare(lsm_interp *ip)
     ip->bg = 1;
     ip->bg_cycles = ip->cycles;
     ip->bg_gen = ip->pl->gen;
-    ip->bg_stale = lsm_planner_stale_count(ip->pl);
     ip->bg_hold = ip->hold_req;
     swpt w;
     if (!next_switch(ip, &w))

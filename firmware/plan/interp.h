@@ -205,14 +205,12 @@ typedef struct lsm_interp {
     uint32_t prepared;                         /* pieces planned by lsm_interp_prepare */
     lsm_interp_prep prep;                      /* the slot of lsm_interp_prepare */
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (lsm_interp_tick_cause) */
-    /* what the last lsm_interp_prepare saw, for TP_LATE: the step count, planner generation, invalidation count
-     * and hold request then */
+    /* what the last lsm_interp_prepare saw, for TP_LATE: the step count, planner generation and hold request then */
     uint64_t bg_cycles;
+    uint64_t took_cycle; /* the step count when a piece was last taken (TP_SHORT: in the current step) */
     uint32_t bg_gen;
-    uint32_t bg_stale;
     uint8_t bg_hold;
-    uint8_t took; /* a piece was taken in the current step (TP_SHORT) */
-    uint8_t reserved3[2];
+    uint8_t reserved3[3];
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */

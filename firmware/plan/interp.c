@@ -614,15 +614,13 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &NXT(ip));
     const bool needed =
         w->kind == LSM_INTERP_SW_REST || (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES);
-    if (st != LSM_OK && w->mode == LSM_PIECE_HOLD && needed && w->v > R0) {
-        /* a piece is needed here (the current one ends) and no hold fits yet: go on normally (planned stops
-         * always exist), the hold takes effect at the next point where a = 0 */
+    /* A piece planned normally instead where nothing fits in w's mode: (a) a piece is needed here (the current one
+     * ends) and no hold fits yet: go on normally (planned stops always exist), the hold takes effect at the next point
+     * where a = 0; (b) the current piece is stale and the step must replace it here: what replacement_for would plan
+     * in the step, planned here instead (the slot keeps w's mode: the step asks for it). */
+    const bool hold_needed = w->mode == LSM_PIECE_HOLD && needed && w->v > R0;
+    if (st != LSM_OK && (hold_needed || (w->mode != LSM_PIECE_NORMAL && ip->bg && stale_replaces_at(ip, w))))
         st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, LSM_PIECE_NORMAL, &NXT(ip));
-    } else if (st != LSM_OK && w->mode != LSM_PIECE_NORMAL && ip->bg && stale_replaces_at(ip, w)) {
-        /* the current piece is stale and the step must replace it here: what replacement_for would plan in the
-         * step (a piece planned normally), planned here instead (the slot keeps w's mode: the step asks for it) */
-        st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, LSM_PIECE_NORMAL, &NXT(ip));
-    }
     if (st == LSM_E_INTERNAL) { /* a fallback piece (counted by the planner): it is still a verified stop */
         ip->plan_errors++;
         st = LSM_OK;

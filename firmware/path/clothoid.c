@@ -151,10 +151,8 @@ static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom
 
 /* ---------------------------------------------------------------- Fresnel integrals */
 
-/* E(x) = C(x) + i S(x) for 0 <= x <= ~1.6: x * sum (i z)^k / (k! (2k + 1)), z = pi x^2 / 2. */
-static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
+void lsm_clothoid_unit_fresnel(lsm_real z, lsm_real *x, lsm_real *y)
 {
-    const lsm_real z = CL_PI * LSM_R(0.5) * x * x;
     lsm_real tr = LSM_R(1.0), ti = LSM_R(0.0);
     lsm_real sr = LSM_R(1.0), si = LSM_R(0.0);
     for (int k = 0; k < 60; k++) {
@@ -169,6 +167,15 @@ static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
         if (cl_abs1(tr, ti) * d <= LSM_R(0.25) * LSM_REAL_EPS * smallest)
             break;
     }
+    *x = sr;
+    *y = si;
+}
+
+/* E(x) = C(x) + i S(x) for 0 <= x <= ~1.6: x * sum (i z)^k / (k! (2k + 1)), z = pi x^2 / 2. */
+static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
+{
+    lsm_real sr, si;
+    lsm_clothoid_unit_fresnel(CL_PI * LSM_R(0.5) * x * x, &sr, &si);
     *c = x * sr;
     *s = x * si;
 }

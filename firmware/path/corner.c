@@ -668,7 +668,7 @@ static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real 
  * k, block 2's start tangent in the frame (t2x, t2y) and the turning delta. */
 typedef struct {
     const lsm_geom *bb[2];
-    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3];
+    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3], gap; /* gap = |g| */
     lsm_real n[3], ex[3], ey[3];
     lsm_real k[2];
     lsm_real t2x, t2y, delta;
@@ -785,7 +785,8 @@ static lsm_status cn_corner_setup(const lsm_geom *b1, const lsm_geom *b2, cn_cor
     lsm_geom_eval(b2, LSM_R(0.0), cc->v2, cc->t2, NULL);
     for (int i = 0; i < 3; i++)
         cc->g[i] = cc->v2[i] - cc->v1[i];
-    if (lsm_sqrt(lsm_dot3(cc->g, cc->g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+    cc->gap = lsm_sqrt(lsm_dot3(cc->g, cc->g));
+    if (cc->gap > (lsm_real)LSM_CORNER_GAP_TOL_MM)
         return LSM_E_GAP;
     cc->arc1 = b1->kind == LSM_GEOM_ARC;
     cc->arc2 = b2->kind == LSM_GEOM_ARC;
@@ -843,7 +844,7 @@ static lsm_status cn_line_line(const cn_corner *cc, const lsm_real dmax[2], lsm_
     out->kappa_max_per_mm = delta / L;
     out->sharpness_max_per_mm2 = c;
     /* B ends on block 2 by symmetry (rounding only); what is left is the input's own gap */
-    out->gap_mm = lsm_sqrt(lsm_dot3(cc->g, cc->g));
+    out->gap_mm = cc->gap;
     out->gap_rad = LSM_R(0.0);
     out->closed_form = 1;
     out->scales = 1;
@@ -860,6 +861,15 @@ typedef struct {
     int scales;
 } cn_search;
 
+/* The scale at which the model D = a L + b L^2 (a > 0, b >= 0) reaches aim: the stable root of b L^2 + a L - aim = 0
+ * (only + - * / and sqrt, so that the float build gives the same results on the host and on the Cortex-M4F). */
+CN_NOINLINE static lsm_real cn_model_scale(lsm_real a, lsm_real b, lsm_real aim)
+{
+    if (b > LSM_R(0.0))
+        return LSM_R(2.0) * aim / (a + lsm_sqrt(a * a + LSM_R(4.0) * b * aim));
+    return aim / a;
+}
+
 /* First scale from the model D ~ a L + b L^2, aimed at the middle of the accepted band, within the trim limits. */
 static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc, const lsm_real dmax[2],
                            lsm_real target, lsm_real Y, lsm_real hc, lsm_real ratio)
@@ -867,13 +877,7 @@ static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc,
     const lsm_real aim0 = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
     const lsm_real a = Y / hc;
     const lsm_real bq = CN_PATH_DEV_COEF * lsm_fabs(cc->k[1] - cc->k[0]);
-    lsm_real L;
-    if (bq > LSM_R(0.0)) {
-        const lsm_real disc = a * a + LSM_R(4.0) * bq * aim0;
-        L = LSM_R(2.0) * aim0 / (a + lsm_sqrt(disc)); /* stable root of b L^2 + a L - aim0 = 0 */
-    } else {
-        L = aim0 / a;
-    }
+    lsm_real L = cn_model_scale(a, bq, aim0);
     const lsm_real rg = ratio > LSM_R(1.0) ? ratio : LSM_R(1.0);
     const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
     if (L * rg > dm)
@@ -956,11 +960,7 @@ static bool cn_search_measure(cn_ctx *ctx, cn_search *s, lsm_real d1, lsm_real d
     }
     /* secant step in log-log, aiming slightly inside, but not past the trim limits */
     const lsm_real aim = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
-    lsm_real Ln;
-    if (s->mb > LSM_R(0.0))
-        Ln = LSM_R(2.0) * aim / (s->ma + lsm_sqrt(s->ma * s->ma + LSM_R(4.0) * s->mb * aim));
-    else
-        Ln = aim / s->ma;
+    lsm_real Ln = cn_model_scale(s->ma, s->mb, aim);
     const lsm_real L_trim = L * CN_TRIM_BACKOFF / rho;
     if (Ln > L_trim)
         Ln = L_trim;
@@ -1042,7 +1042,7 @@ static lsm_status cn_general(const cn_corner *cc, const lsm_real dmax[2], lsm_re
     }
     /* limited: the tolerance could not be used (trim limits, or no transition at larger scales) */
     out->limited = (s.best_vd > s.best_pd ? s.best_vd : s.best_pd) < CN_ACCEPT * target ? 1 : 0;
-    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], lsm_sqrt(lsm_dot3(cc->g, cc->g)), out);
+    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], cc->gap, out);
     if (st != LSM_OK)
         return st;
     out->vertex_dev_mm = s.best_vd;

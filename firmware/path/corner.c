@@ -32,13 +32,12 @@
 #endif
 
 /* One block near the corner, in the corner frame: curvature k, available length, and what the
- * distance function needs for an arc (centre, radius, the angular range as mid direction and
- * cosine of the half width). */
+ * distance function needs (for an arc: |k|, the unit vector towards the centre, and the angular range as the
+ * tangents at both ends). */
 typedef struct {
     lsm_real k, len, dmax;
     lsm_real bx, by;     /* the block's point at the corner (V1 or V2) */
     lsm_real tx, ty;     /* its tangent there */
-    lsm_real cx, cy, r;  /* arc centre and radius */
     lsm_real ak, ux, uy; /* arc: |k|, unit vector from the corner point towards the centre */
     lsm_real fx, fy;     /* the block's far end point */
     lsm_real ftx, fty;   /* its tangent there */
@@ -551,9 +550,6 @@ CN_NOINLINE static void cn_setup_block(cn_block *b, const lsm_geom *g, lsm_real 
         return;
     /* centre: left of the tangent for k > 0 */
     b->ak = lsm_fabs(k);
-    b->r = LSM_R(1.0) / b->ak;
-    b->cx = bx - ty / k;
-    b->cy = by + tx / k;
     b->ux = k > LSM_R(0.0) ? -ty : ty;
     b->uy = k > LSM_R(0.0) ? tx : -tx;
     const lsm_real turn = lsm_fabs(k) * len;

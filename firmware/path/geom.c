@@ -467,8 +467,6 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
     case LSM_GEOM_ARC: {
         lsm_geom_arc *a = &g->u.arc;
         const lsm_real f = d / g->len;
-        lsm_real n[3];
-        geom_arc_normal(a, n);
         lsm_real p[LSM_MAX_AXES] = {0};
         (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
         for (int i = 0; i < 3; i++)

@@ -499,8 +499,8 @@ lsm_status lsm_clothoid_eval(const lsm_clothoid *cl, lsm_real s_mm, lsm_clothoid
 
 /* ---------------------------------------------------------------- stepping */
 
-/* Functions of the stepper's usual path, inlined there (GCC does not inline functions used more than once at -Os);
- * elsewhere they are called through the plain functions below them. */
+/* Functions of the stepper's usual path, inlined into the one function that runs it, cl_step_poly (GCC does not
+ * inline functions used more than once at -Os); elsewhere they are called through the plain functions below them. */
 #if defined(__GNUC__)
 #define CL_HOT static inline __attribute__((always_inline))
 #else

@@ -388,6 +388,7 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
     coef c;
     coef_get(b, &c);
     lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
+    bool cross_cut = false; /* rj cut to CROSS_SHARE_TARGET */
     if (m->amax > R0 && c.aa > R0) {
         const lsm_real al = (R1 - c.ba * m->v2) / c.aa;
         ra_acc = al > R0 ? al / m->amax : R0;
@@ -398,11 +399,11 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
         if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
             ra_cross = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
             rj = CROSS_SHARE_TARGET;
+            cross_cut = true;
         } else if (m->jmax > R0) {
             rj = (room - cross) / c.aj / m->jmax;
         }
     }
-    const bool cross_cut = rj == CROSS_SHARE_TARGET;
     if ((ra_acc < R1 || ra_cross < R1 || rj < R1) && b->g.kind == LSM_GEOM_CLOTHOID)
         frame_improve(pl, b, m, &c, res, &ra_acc, &ra_cross, &rj);
     if (cross_cut && rj < R1)

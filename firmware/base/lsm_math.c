@@ -9,8 +9,9 @@
  * classic Cephes minimax polynomials on [-pi/4, pi/4]; cbrt by an exponent-halving first guess and three
  * Newton steps; atan by the Cephes reduction to |t| <= tan(pi/8) and a degree-9 odd polynomial.
  * Accuracy (tests/base/test_lsm_math.c, against double libm): about 1-2 ulp over the ranges used by the core.
- * The double build keeps the C library (lsm_math.h). lsm_math_sincosf (sin and cos at once, the same bits) is
- * one function here, not inline in every caller: it was copied into each object that called it (flash).
+ * The double build keeps the C library (lsm_math.h). sin and cos are one kernel, lsm_math_sincos_pairf (both from one
+ * reduction; lsm_math_sinf, lsm_math_cosf and lsm_math_sincosf are its halves): one copy in the image (flash), and
+ * declared const in lsm_math.h, so that lsm_sin(x) and lsm_cos(x) of the same x in one function are one call.
  */
 #include "lsm_math.h"
 
@@ -24,6 +25,14 @@ void lsm_cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3])
     o[2] = a[0] * b[1] - a[1] * b[0];
 }
 
+/* Inputs beyond this are passed through as they were before (NaN, inf and the largest finite floats): one test
+ * |x| <= LSM_MATH_BIG_F (false for NaN) instead of three comparisons. */
+#define LSM_MATH_BIG_F 3.0e38f
+#if defined(__GNUC__)
+#define LM_FABSF(x) __builtin_fabsf(x) /* one VABS on the Cortex-M4F */
+#else
+#define LM_FABSF(x) fabsf(x)
+#endif
 #define PIO2_F 1.5707963267948966f
 #define PIO4_F 0.7853981633974483f
 
@@ -50,39 +59,12 @@ static float lsm_math_reduce_pio2f(float x, unsigned *quadrant)
     return ((x - k * 1.5703125f) - k * 4.837512969970703e-4f) - k * 7.549790126404332e-8f;
 }
 
-float lsm_math_sinf(float x)
+lsm_math_sc lsm_math_sincos_pairf(float x)
 {
-    if (x != x || x > 3.0e38f || x < -3.0e38f)
-        return x - x; /* NaN for NaN and inf */
-    unsigned q;
-    const float r = lsm_math_reduce_pio2f(x, &q);
-    switch (q) {
-    case 0: return lsm_math_sin_polyf(r);
-    case 1: return lsm_math_cos_polyf(r);
-    case 2: return -lsm_math_sin_polyf(r);
-    default: return -lsm_math_cos_polyf(r);
-    }
-}
-
-float lsm_math_cosf(float x)
-{
-    if (x != x || x > 3.0e38f || x < -3.0e38f)
-        return x - x;
-    unsigned q;
-    const float r = lsm_math_reduce_pio2f(x, &q);
-    switch (q) {
-    case 0: return lsm_math_cos_polyf(r);
-    case 1: return -lsm_math_sin_polyf(r);
-    case 2: return -lsm_math_cos_polyf(r);
-    default: return lsm_math_sin_polyf(r);
-    }
-}
-
-void lsm_math_sincosf(float x, float *s_out, float *c_out)
-{
-    if (x != x || x > 3.0e38f || x < -3.0e38f) {
-        *s_out = *c_out = x - x; /* NaN for NaN and inf */
-        return;
+    lsm_math_sc o;
+    if (!(LM_FABSF(x) <= LSM_MATH_BIG_F)) {
+        o.s = o.c = x - x; /* NaN for NaN and inf (0 for the finite rest above LSM_MATH_BIG_F) */
+        return o;
     }
     unsigned q;
     const float r = lsm_math_reduce_pio2f(x, &q);
@@ -96,13 +78,32 @@ void lsm_math_sincosf(float x, float *s_out, float *c_out)
         sv = -sv;
         cv = -cv;
     }
-    *s_out = sv;
-    *c_out = cv;
+    o.s = sv;
+    o.c = cv;
+    return o;
+}
+
+/* The public single functions: the pair's halves (one kernel in the image instead of three). */
+float lsm_math_sinf(float x)
+{
+    return lsm_math_sincos_pairf(x).s;
+}
+
+float lsm_math_cosf(float x)
+{
+    return lsm_math_sincos_pairf(x).c;
+}
+
+void lsm_math_sincosf(float x, float *s_out, float *c_out)
+{
+    const lsm_math_sc o = lsm_math_sincos_pairf(x);
+    *s_out = o.s;
+    *c_out = o.c;
 }
 
 float lsm_math_cbrtf(float x)
 {
-    if (x == 0 || x != x || x > 3.0e38f || x < -3.0e38f)
+    if (x == 0 || !(LM_FABSF(x) <= LSM_MATH_BIG_F))
         return x;
     const float a = x < 0 ? -x : x;
     uint32_t bits;

@@ -24,8 +24,8 @@
 #define lsm_cbrt lsm_math_cbrtf
 #define lsm_floor floorf
 #define lsm_ceil ceilf
-#define lsm_sin lsm_math_sinf
-#define lsm_cos lsm_math_cosf
+#define lsm_sin(x) (lsm_math_sincos_pairf(x).s)
+#define lsm_cos(x) (lsm_math_sincos_pairf(x).c)
 #define lsm_atan2 lsm_math_atan2f
 #define LSM_REAL_EPS 1.1920929e-7f
 #define LSM_REAL_MAX 3.4028235e38f
@@ -47,7 +47,20 @@
 #define LSM_REAL_MAX 1.7976931348623157e308
 #endif
 
-/* Deterministic single-precision functions (lsm_math.c); about 1-2 ulp. */
+/* sin and cos of x from one reduction (lsm_math.c): the kernel of every float sin and cos of the core. Const (no side
+ * effects, the result depends on x only): GCC merges lsm_sin(x) and lsm_cos(x) of the same x into one call. A pair
+ * of floats is returned in registers (s0, s1 on the Cortex-M4F). */
+typedef struct lsm_math_sc {
+    float s, c;
+} lsm_math_sc;
+#if defined(__GNUC__)
+__attribute__((const))
+#endif
+lsm_math_sc
+lsm_math_sincos_pairf(float x);
+
+/* Deterministic single-precision functions (lsm_math.c); about 1-2 ulp. sin and cos are the halves of
+ * lsm_math_sincos_pairf (the same bits). */
 float lsm_math_sinf(float x);
 float lsm_math_cosf(float x);
 float lsm_math_cbrtf(float x);
@@ -56,11 +69,9 @@ float lsm_math_atan2f(float y, float x);
 /* 0 if x is finite, else LSM_E_NAN / LSM_E_INF (as int, to keep this header free of status.h). */
 static inline int lsm_check_finite(lsm_real x)
 {
-    if (x != x)
-        return -2; /* LSM_E_NAN */
-    if (x > LSM_REAL_MAX || x < -LSM_REAL_MAX)
-        return -3; /* LSM_E_INF */
-    return 0;
+    if (x - x == LSM_R(0.0)) /* x - x is 0 for every finite x, NaN for NaN and +-inf: one test, no constant */
+        return 0;
+    return x != x ? -2 /* LSM_E_NAN */ : -3 /* LSM_E_INF */;
 }
 
 /* a . b of 3-vectors (inline: it sits in the arc fit's per-point loops). */
@@ -72,15 +83,16 @@ static inline lsm_real lsm_dot3(const lsm_real a[3], const lsm_real b[3])
 /* a x b of 3-vectors (lsm_math.c: one copy for the core instead of one per object). */
 void lsm_cross3(const lsm_real a[3], const lsm_real b[3], lsm_real o[3]);
 
-/* sin and cos of x at once: the same bits as lsm_math_sinf and lsm_math_cosf, one reduction (lsm_math.c: one
- * copy in the image, not one per caller's object). */
+/* sin and cos of x at once through pointers (lsm_math_sincos_pairf's halves). */
 void lsm_math_sincosf(float x, float *s_out, float *c_out);
 
 /* sin and cos of x at once (float: one argument reduction for both). */
 static inline void lsm_sincos(lsm_real x, lsm_real *s, lsm_real *c)
 {
 #if LSM_REAL_IS_FLOAT
-    lsm_math_sincosf(x, s, c);
+    const lsm_math_sc o = lsm_math_sincos_pairf(x);
+    *s = o.s;
+    *c = o.c;
 #else
     *s = sin(x);
     *c = cos(x);

@@ -24,7 +24,7 @@ static const lsm_real k_inv[] = {CL_INV(1),  CL_INV(2),  CL_INV(3),  CL_INV(4), 
                                  CL_INV(22), CL_INV(23), CL_INV(24), CL_INV(25), CL_INV(26), CL_INV(27), CL_INV(28),
                                  CL_INV(29), CL_INV(30), CL_INV(31), CL_INV(32), CL_INV(33), CL_INV(34), CL_INV(35),
                                  CL_INV(36), CL_INV(37), CL_INV(38), CL_INV(39), CL_INV(40), CL_INV(41), CL_INV(42),
-                                 CL_INV(43), CL_INV(44), CL_INV(45), CL_INV(46), CL_INV(47), CL_INV(48)};
+                                 CL_INV(43), CL_INV(44)};
 _Static_assert(sizeof k_inv / sizeof k_inv[0] >= LSM_CLOTHOID_MAX_TERMS + 4, "k_inv too short");
 
 static inline lsm_real cl_abs1(lsm_real r, lsm_real i)
@@ -102,10 +102,20 @@ void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_cl
     o->mi[2] = nmom > 2 ? m2i : LSM_R(0.0);
 }
 
+#if defined(__GNUC__)
+#define CL_INLINE static inline __attribute__((always_inline))
+#define CL_NOINLINE static __attribute__((noinline))
+#else
+#define CL_INLINE static inline
+#define CL_NOINLINE static
+#endif
+
 /* Piecewise series over [0, s] (s > 0): moments int_0^s t^j e^{i theta(t)} dt, j < nmom, in absolute
- * orientation; each piece turns at most 1 rad. Returns the number of pieces. */
-static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3], lsm_real mi[3],
-                     lsm_real rot[2])
+ * orientation; each piece turns at most 1 rad. Returns the number of pieces. Inlined into two functions: the
+ * position only (nmom = 1: lsm_clothoid_integral, the stepper's anchor) and the moments of the fit's Jacobian, so
+ * that an image without the fit does not carry the higher moments' code. */
+CL_INLINE int cl_pieces_body(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3],
+                             lsm_real mi[3], lsm_real rot[2])
 {
     lsm_real ph = lsm_fabs(k0) * s + lsm_fabs(c) * s * s;
     int m = 1;
@@ -149,12 +159,26 @@ static int cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom
     return m;
 }
 
+/* The position int_0^s e^{i theta(t)} dt (cl_pieces_body with nmom = 1) and, if rot != NULL, e^{i theta(s)}. */
+CL_NOINLINE void cl_pieces_pos(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, lsm_real *dx, lsm_real *dy,
+                               lsm_real rot[2])
+{
+    lsm_real mr[3], mi[3];
+    (void)cl_pieces_body(th0, k0, c, s, 1, mr, mi, rot);
+    *dx = mr[0];
+    *dy = mi[0];
+}
+
+/* The moments j < nmom (the fit). */
+CL_NOINLINE void cl_pieces(lsm_real th0, lsm_real k0, lsm_real c, lsm_real s, int nmom, lsm_real mr[3], lsm_real mi[3])
+{
+    (void)cl_pieces_body(th0, k0, c, s, nmom, mr, mi, NULL);
+}
+
 /* ---------------------------------------------------------------- Fresnel integrals */
 
-/* E(x) = C(x) + i S(x) for 0 <= x <= ~1.6: x * sum (i z)^k / (k! (2k + 1)), z = pi x^2 / 2. */
-static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
+void lsm_clothoid_unit_fresnel(lsm_real z, lsm_real *x, lsm_real *y)
 {
-    const lsm_real z = CL_PI * LSM_R(0.5) * x * x;
     lsm_real tr = LSM_R(1.0), ti = LSM_R(0.0);
     lsm_real sr = LSM_R(1.0), si = LSM_R(0.0);
     for (int k = 0; k < 60; k++) {
@@ -169,6 +193,15 @@ static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
         if (cl_abs1(tr, ti) * d <= LSM_R(0.25) * LSM_REAL_EPS * smallest)
             break;
     }
+    *x = sr;
+    *y = si;
+}
+
+/* E(x) = C(x) + i S(x) for 0 <= x <= ~1.6: x * sum (i z)^k / (k! (2k + 1)), z = pi x^2 / 2. */
+static void cl_fresnel_series(lsm_real x, lsm_real *c, lsm_real *s)
+{
+    lsm_real sr, si;
+    lsm_clothoid_unit_fresnel(CL_PI * LSM_R(0.5) * x * x, &sr, &si);
     *c = x * sr;
     *s = x * si;
 }
@@ -382,10 +415,7 @@ void lsm_clothoid_integral(lsm_real theta0_rad, lsm_real kappa0_per_mm, lsm_real
         return;
     }
     if (cl_series_regime(k0, c, s)) {
-        lsm_real mr[3], mi[3];
-        cl_pieces(th0, k0, c, s, 1, mr, mi, NULL);
-        *dx = mr[0];
-        *dy = mi[0];
+        cl_pieces_pos(th0, k0, c, s, dx, dy, NULL);
         return;
     }
     if (c > LSM_R(0.0)) {
@@ -469,8 +499,8 @@ lsm_status lsm_clothoid_eval(const lsm_clothoid *cl, lsm_real s_mm, lsm_clothoid
 
 /* ---------------------------------------------------------------- stepping */
 
-/* Functions of the stepper's usual path, inlined there (GCC does not inline functions used more than once at -Os);
- * elsewhere they are called through the plain functions below them. */
+/* Functions of the stepper's usual path, inlined into the one function that runs it, cl_step_poly (GCC does not
+ * inline functions used more than once at -Os); elsewhere they are called through the plain functions below them. */
 #if defined(__GNUC__)
 #define CL_HOT static inline __attribute__((always_inline))
 #else
@@ -519,16 +549,11 @@ CL_HOT bool cl_local_is_small(lsm_real a, lsm_real b)
            lsm_fabs(b) <= (lsm_real)LSM_CLOTHOID_FAST_B_RAD;
 }
 
-static cl_em cl_local_poly(lsm_real a, lsm_real b)
-{
-    return cl_local_poly_hot(a, b);
-}
-
 static cl_em cl_local_any(lsm_real a, lsm_real b)
 {
     cl_em o;
     if (cl_local_is_small(a, b))
-        return cl_local_poly(a, b);
+        return cl_local_poly_hot(a, b);
     lsm_clothoid_local(a, b, &o.er, &o.ei, &o.mr, &o.mi);
     return o;
 }
@@ -566,6 +591,25 @@ static void cl_apply(lsm_clothoid_stepper *st, lsm_real h, cl_em em)
     cl_apply_hot(st, h, em);
 }
 
+/* A small sub-step (cl_local_is_small): the polynomial and the update, the one copy of the polynomial in the image
+ * (out of line: the usual step of lsm_clothoid_step calls it too). */
+CL_NOINLINE void cl_step_poly(lsm_clothoid_stepper *st, lsm_real h, lsm_real a, lsm_real b)
+{
+    cl_apply_hot(st, h, cl_local_poly_hot(a, b));
+}
+
+/* Any sub-step of length h (a = k h, b = c h^2): the polynomial where small, else the general series. */
+static void cl_step_one(lsm_clothoid_stepper *st, lsm_real h, lsm_real a, lsm_real b)
+{
+    if (cl_local_is_small(a, b)) {
+        cl_step_poly(st, h, a, b);
+        return;
+    }
+    cl_em o;
+    lsm_clothoid_local(a, b, &o.er, &o.ei, &o.mr, &o.mi);
+    cl_apply(st, h, o);
+}
+
 /* Exact state at st->s_mm: x and y as lsm_clothoid_eval computes them (bit for bit, so that the end of the segment
  * is landed on exactly), the tangent from the same series (its end rotation) where that is used, else from the
  * angle. */
@@ -575,10 +619,7 @@ static void cl_anchor(lsm_clothoid_stepper *st)
     const lsm_real s = st->s_mm;
     lsm_real dx, dy, rot[2];
     if (s > LSM_R(0.0) && cl->c_per_mm2 != LSM_R(0.0) && cl_series_regime(cl->kappa0_per_mm, cl->c_per_mm2, s)) {
-        lsm_real mr[3], mi[3];
-        cl_pieces(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, 1, mr, mi, rot);
-        dx = mr[0];
-        dy = mi[0];
+        cl_pieces_pos(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy, rot);
     } else {
         lsm_clothoid_integral(cl->theta0_rad, cl->kappa0_per_mm, cl->c_per_mm2, s, &dx, &dy);
         lsm_sincos(cl_theta(cl, s), &rot[1], &rot[0]);
@@ -625,11 +666,11 @@ static bool cl_anchor_poly(lsm_clothoid_stepper *st)
     st->cx_mm = st->cy_mm = LSM_R(0.0);
     if (m == 1) { /* the usual block entry: s is short */
         if (s > LSM_R(0.0))
-            cl_apply(st, s, cl_local_poly(k0 * s, c * s * s));
+            cl_step_one(st, s, k0 * s, c * s * s); /* small: |a + b/2| <= ph, |b| = bb, also rounded */
     } else {
         const lsm_real h = s / (lsm_real)m, b = c * h * h;
         for (int j = 0; j < m; j++)
-            cl_apply(st, h, cl_local_any((k0 + c * (h * (lsm_real)j)) * h, b)); /* checks the region again */
+            cl_step_one(st, h, (k0 + c * (h * (lsm_real)j)) * h, b); /* checks the region again */
     }
     st->kappa_per_mm = k0 + c * s;
     st->since_anchor = 0;
@@ -715,7 +756,7 @@ static void cl_step_general(lsm_clothoid_stepper *st, lsm_real ds, lsm_real a, l
     }
     if (m == 0) {
         if (ph <= LSM_R(1.0)) {
-            cl_apply(st, ds, cl_local_any(a, b));
+            cl_step_one(st, ds, a, b);
             return;
         }
         m = (int)lsm_ceil(ph);
@@ -723,8 +764,8 @@ static void cl_step_general(lsm_clothoid_stepper *st, lsm_real ds, lsm_real a, l
     const lsm_real c = st->seg.c_per_mm2;
     const lsm_real h = ds / (lsm_real)m;
     for (int i = 0; i < m; i++) {
-        cl_apply(st, h, cl_local_any(st->kappa_per_mm * h, c * h * h)); /* checks the region again */
-        st->kappa_per_mm += c * h;                                      /* reset from the arc length after the step */
+        cl_step_one(st, h, st->kappa_per_mm * h, c * h * h); /* checks the region again */
+        st->kappa_per_mm += c * h;                           /* reset from the arc length after the step */
     }
 }
 
@@ -746,7 +787,7 @@ lsm_status lsm_clothoid_step(lsm_clothoid_stepper *st, lsm_real ds_mm, lsm_cloth
         const lsm_real c = st->seg.c_per_mm2;
         const lsm_real a = st->kappa_per_mm * ds_mm, b = c * ds_mm * ds_mm;
         if (cl_local_is_small(a, b)) /* the usual step: a fixed polynomial */
-            cl_apply_hot(st, ds_mm, cl_local_poly_hot(a, b));
+            cl_step_poly(st, ds_mm, a, b);
         else
             cl_step_general(st, ds_mm, a, b);
         const lsm_real is = ds_mm - st->cs_mm, ns = st->s_mm + is;
@@ -791,7 +832,7 @@ static bool cl_fit_eval(cl_fit *f, lsm_real c, lsm_real s, lsm_real *F1, lsm_rea
     if (!(s > LSM_R(0.0)) || !(phi <= (lsm_real)LSM_CLOTHOID_FIT_MAX_PHASE_RAD))
         return false;
     lsm_real mr[3], mi[3];
-    cl_pieces(f->th0, f->k0, c, s, J ? 3 : 1, mr, mi, NULL);
+    cl_pieces(f->th0, f->k0, c, s, J ? 3 : 1, mr, mi);
     f->evals++;
     *F1 = f->d0 + f->nx * mr[0] + f->ny * mi[0];
     *F2 = s * (f->k0 + LSM_R(0.5) * c * s) - f->delta;
@@ -1013,12 +1054,12 @@ static bool cl_fit_bracket(cl_fit *f, lsm_real dist, lsm_real sa, lsm_real ra, l
 /* The result at (c, s): the end state from one more evaluation, and the residuals. */
 static void cl_fit_emit(const cl_fit *f, lsm_real c, lsm_real s, lsm_real F1, lsm_real F2, lsm_clothoid_fit_result *out)
 {
-    lsm_real mr[3], mi[3];
-    cl_pieces(f->th0, f->k0, c, s, 1, mr, mi, NULL);
+    lsm_real dx, dy;
+    cl_pieces_pos(f->th0, f->k0, c, s, &dx, &dy, NULL);
     out->c_per_mm2 = c;
     out->s_mm = s;
-    out->end.x_mm = f->x0 + mr[0];
-    out->end.y_mm = f->y0 + mi[0];
+    out->end.x_mm = f->x0 + dx;
+    out->end.y_mm = f->y0 + dy;
     out->end.theta_rad = f->th0 + s * (f->k0 + LSM_R(0.5) * c * s);
     out->end.kappa_per_mm = f->k0 + c * s;
     out->residual_mm = lsm_fabs(F1);

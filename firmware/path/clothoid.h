@@ -131,6 +131,11 @@ typedef struct lsm_clothoid_series {
 } lsm_clothoid_series;
 void lsm_clothoid_series_eval(lsm_real a, lsm_real b, int nmom, bool rel, lsm_clothoid_series *out);
 
+/* X + iY = int_0^1 e^{i z u^2} du = sum_k (i z)^k / (k! (2k + 1)), for |z| up to ~4 (the Fresnel integrals below 1.6,
+ * E(x) = x (X + iY) at z = pi x^2 / 2; the corner module's symmetric pair at z = delta / 2). The sum stops when a
+ * term is below eps / 4 of the smaller of |X| and |Y|. */
+void lsm_clothoid_unit_fresnel(lsm_real z, lsm_real *x, lsm_real *y);
+
 /* The same kernel without moments beyond M_0, in registers, to absolute epsilon: E = e^{i psi(1)}
  * and M = int_0^1 e^{i psi(u)} du. A step of length w from a point with unit tangent T and curvature
  * k along sharpness c moves by w T M and turns T into T E (a = k w, b = c w^2). Used by the stepper and

@@ -23,14 +23,21 @@
 #define CN_GOLDEN 4  /* golden-section steps of a smooth bracket before the parabolic ones */
 #define CN_ACCEPT ((lsm_real)LSM_CORNER_ACCEPT)
 
+/* Out of line where GCC's -Os inlining copies a function into each of its callers although one shared copy is
+ * smaller (measured per function on the Cortex-M4F build: the flash of the core counts every byte). */
+#if defined(__GNUC__)
+#define CN_NOINLINE __attribute__((noinline))
+#else
+#define CN_NOINLINE
+#endif
+
 /* One block near the corner, in the corner frame: curvature k, available length, and what the
- * distance function needs for an arc (centre, radius, the angular range as mid direction and
- * cosine of the half width). */
+ * distance function needs (for an arc: |k|, the unit vector towards the centre, and the angular range as the
+ * tangents at both ends). */
 typedef struct {
     lsm_real k, len, dmax;
     lsm_real bx, by;     /* the block's point at the corner (V1 or V2) */
     lsm_real tx, ty;     /* its tangent there */
-    lsm_real cx, cy, r;  /* arc centre and radius */
     lsm_real ak, ux, uy; /* arc: |k|, unit vector from the corner point towards the centre */
     lsm_real fx, fy;     /* the block's far end point */
     lsm_real ftx, fty;   /* its tangent there */
@@ -524,9 +531,9 @@ static void cn_measure(cn_ctx *c, lsm_real *vd, lsm_real *pd)
     *pd = best;
 }
 
-/* Sets up block i of the corner frame. Returns false if an arc's plane does not fit. */
-static void cn_setup_block(cn_block *b, const lsm_geom *g, lsm_real k, lsm_real len, lsm_real dmax, lsm_real bx,
-                           lsm_real by, lsm_real tx, lsm_real ty, lsm_real sgn)
+/* Sets up block i of the corner frame (called twice: out of line, -124 B). */
+CN_NOINLINE static void cn_setup_block(cn_block *b, const lsm_geom *g, lsm_real k, lsm_real len, lsm_real dmax,
+                                       lsm_real bx, lsm_real by, lsm_real tx, lsm_real ty, lsm_real sgn)
 {
     b->k = k;
     b->len = len;
@@ -543,9 +550,6 @@ static void cn_setup_block(cn_block *b, const lsm_geom *g, lsm_real k, lsm_real 
         return;
     /* centre: left of the tangent for k > 0 */
     b->ak = lsm_fabs(k);
-    b->r = LSM_R(1.0) / b->ak;
-    b->cx = bx - ty / k;
-    b->cy = by + tx / k;
     b->ux = k > LSM_R(0.0) ? -ty : ty;
     b->uy = k > LSM_R(0.0) ? tx : -tx;
     const lsm_real turn = lsm_fabs(k) * len;
@@ -579,25 +583,12 @@ static lsm_status cn_check_block(const lsm_geom *g)
 }
 
 /* X + iY = int_0^1 e^{i d u^2/2} du = sum_m (i d/2)^m / (m! (2m + 1)), 0 <= d <= pi: the half of the
- * symmetric pair of unit length. Stops at eps relative to Y (which is ~ d/6 for small d). */
+ * symmetric pair of unit length (the series of the Fresnel integrals, lsm_clothoid_unit_fresnel at z = d/2). Its
+ * stop (a term below eps/4 of min(|X|, |Y|)) is the one written here before, eps/4 of Y: 0 <= Y < X for d in
+ * [0, pi]; for the tiny negative d of a tangent joint, the terms it leaves out are below half an ulp of Y. */
 static void cn_unit_pair(lsm_real d, lsm_real *X, lsm_real *Y)
 {
-    const lsm_real h = LSM_R(0.5) * d;
-    lsm_real tr = LSM_R(1.0), ti = LSM_R(0.0); /* (i h)^m / m! */
-    lsm_real sr = LSM_R(1.0), si = LSM_R(0.0);
-    for (int m = 1; m < 40; m++) {
-        const lsm_real f = h / (lsm_real)m;
-        const lsm_real nr = -ti * f, ni = tr * f;
-        tr = nr;
-        ti = ni;
-        const lsm_real w = LSM_R(1.0) / (lsm_real)(2 * m + 1);
-        sr += tr * w;
-        si += ti * w;
-        if ((lsm_fabs(tr) + lsm_fabs(ti)) * w <= LSM_R(0.25) * LSM_REAL_EPS * si)
-            break;
-    }
-    *X = sr;
-    *Y = si;
+    lsm_clothoid_unit_fresnel(LSM_R(0.5) * d, X, Y);
 }
 
 /* Fills a clothoid element without the validation of lsm_geom_clothoid_init (the corner's numbers
@@ -673,7 +664,7 @@ static lsm_status cn_emit(const cn_ctx *c, const lsm_real ex[3], const lsm_real 
  * k, block 2's start tangent in the frame (t2x, t2y) and the turning delta. */
 typedef struct {
     const lsm_geom *bb[2];
-    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3];
+    lsm_real v1[LSM_MAX_AXES], v2[LSM_MAX_AXES], t1[3], t2[3], g[3], gap; /* gap = |g| */
     lsm_real n[3], ex[3], ey[3];
     lsm_real k[2];
     lsm_real t2x, t2y, delta;
@@ -790,7 +781,8 @@ static lsm_status cn_corner_setup(const lsm_geom *b1, const lsm_geom *b2, cn_cor
     lsm_geom_eval(b2, LSM_R(0.0), cc->v2, cc->t2, NULL);
     for (int i = 0; i < 3; i++)
         cc->g[i] = cc->v2[i] - cc->v1[i];
-    if (lsm_sqrt(lsm_dot3(cc->g, cc->g)) > (lsm_real)LSM_CORNER_GAP_TOL_MM)
+    cc->gap = lsm_sqrt(lsm_dot3(cc->g, cc->g));
+    if (cc->gap > (lsm_real)LSM_CORNER_GAP_TOL_MM)
         return LSM_E_GAP;
     cc->arc1 = b1->kind == LSM_GEOM_ARC;
     cc->arc2 = b2->kind == LSM_GEOM_ARC;
@@ -848,7 +840,7 @@ static lsm_status cn_line_line(const cn_corner *cc, const lsm_real dmax[2], lsm_
     out->kappa_max_per_mm = delta / L;
     out->sharpness_max_per_mm2 = c;
     /* B ends on block 2 by symmetry (rounding only); what is left is the input's own gap */
-    out->gap_mm = lsm_sqrt(lsm_dot3(cc->g, cc->g));
+    out->gap_mm = cc->gap;
     out->gap_rad = LSM_R(0.0);
     out->closed_form = 1;
     out->scales = 1;
@@ -865,6 +857,15 @@ typedef struct {
     int scales;
 } cn_search;
 
+/* The scale at which the model D = a L + b L^2 (a > 0, b >= 0) reaches aim: the stable root of b L^2 + a L - aim = 0
+ * (only + - * / and sqrt, so that the float build gives the same results on the host and on the Cortex-M4F). */
+CN_NOINLINE static lsm_real cn_model_scale(lsm_real a, lsm_real b, lsm_real aim)
+{
+    if (b > LSM_R(0.0))
+        return LSM_R(2.0) * aim / (a + lsm_sqrt(a * a + LSM_R(4.0) * b * aim));
+    return aim / a;
+}
+
 /* First scale from the model D ~ a L + b L^2, aimed at the middle of the accepted band, within the trim limits. */
 static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc, const lsm_real dmax[2],
                            lsm_real target, lsm_real Y, lsm_real hc, lsm_real ratio)
@@ -872,13 +873,7 @@ static void cn_search_init(cn_search *s, const cn_ctx *ctx, const cn_corner *cc,
     const lsm_real aim0 = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
     const lsm_real a = Y / hc;
     const lsm_real bq = CN_PATH_DEV_COEF * lsm_fabs(cc->k[1] - cc->k[0]);
-    lsm_real L;
-    if (bq > LSM_R(0.0)) {
-        const lsm_real disc = a * a + LSM_R(4.0) * bq * aim0;
-        L = LSM_R(2.0) * aim0 / (a + lsm_sqrt(disc)); /* stable root of b L^2 + a L - aim0 = 0 */
-    } else {
-        L = aim0 / a;
-    }
+    lsm_real L = cn_model_scale(a, bq, aim0);
     const lsm_real rg = ratio > LSM_R(1.0) ? ratio : LSM_R(1.0);
     const lsm_real dm = dmax[0] < dmax[1] ? dmax[0] : dmax[1];
     if (L * rg > dm)
@@ -961,11 +956,7 @@ static bool cn_search_measure(cn_ctx *ctx, cn_search *s, lsm_real d1, lsm_real d
     }
     /* secant step in log-log, aiming slightly inside, but not past the trim limits */
     const lsm_real aim = (LSM_R(1.0) + CN_ACCEPT) * LSM_R(0.5) * target;
-    lsm_real Ln;
-    if (s->mb > LSM_R(0.0))
-        Ln = LSM_R(2.0) * aim / (s->ma + lsm_sqrt(s->ma * s->ma + LSM_R(4.0) * s->mb * aim));
-    else
-        Ln = aim / s->ma;
+    lsm_real Ln = cn_model_scale(s->ma, s->mb, aim);
     const lsm_real L_trim = L * CN_TRIM_BACKOFF / rho;
     if (Ln > L_trim)
         Ln = L_trim;
@@ -976,8 +967,8 @@ static bool cn_search_measure(cn_ctx *ctx, cn_search *s, lsm_real d1, lsm_real d
 }
 
 /* Keeps the next scale inside the bracket (L_ok, L_bad). False when the search ends: the bracket closed, or the
- * next scale collapsed. */
-static bool cn_search_advance(cn_search *s, lsm_real L_next)
+ * next scale collapsed. (Out of line: -60 B, one call per scale.) */
+CN_NOINLINE static bool cn_search_advance(cn_search *s, lsm_real L_next)
 {
     const lsm_real L = s->L;
     bool done = false;
@@ -1047,7 +1038,7 @@ static lsm_status cn_general(const cn_corner *cc, const lsm_real dmax[2], lsm_re
     }
     /* limited: the tolerance could not be used (trim limits, or no transition at larger scales) */
     out->limited = (s.best_vd > s.best_pd ? s.best_vd : s.best_pd) < CN_ACCEPT * target ? 1 : 0;
-    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], lsm_sqrt(lsm_dot3(cc->g, cc->g)), out);
+    lsm_status st = cn_emit(&ctx, cc->ex, cc->ey, cc->bb[0], cc->bb[1], cc->gap, out);
     if (st != LSM_OK)
         return st;
     out->vertex_dev_mm = s.best_vd;

@@ -117,8 +117,9 @@ static bool geom_same_point(const lsm_real start[3], const lsm_real end[3], cons
  *     r = |d/2 + h n|,  phi0 = angle of the start seen from that centre,  sweep = 2 atan2(|d| / 2, dir h),
  * with n the left normal of d. Every quantity is a product of the chord's size and the radius: no r1² - r2², no
  * difference of two end angles, which in float carry ulp(r) / |d| of noise (a 0.2 mm centre shift and a 5e-4 rad
- * turn of the arc at R 400 over a 0.05 mm chord). False (and nothing set) when the end is the start (a full
- * circle) or the centre would move too far (geom_shift_ok): the programmed centre is kept. */
+ * turn of the arc at R 400 over a 0.05 mm chord). The caller has excluded end == start (a full circle,
+ * geom_same_point). False (and nothing set) when the centre would move too far (geom_shift_ok): the programmed centre
+ * is kept. */
 static bool geom_arc_bisector(const lsm_real start[3], const lsm_real end[3], const lsm_real e1[3],
                               const lsm_real e2[3], lsm_real u1, lsm_real v1, lsm_real r1, int dir, lsm_real *r,
                               lsm_real *phi0, lsm_real *sweep)
@@ -126,8 +127,6 @@ static bool geom_arc_bisector(const lsm_real start[3], const lsm_real end[3], co
     const lsm_real d[3] = {end[0] - start[0], end[1] - start[1], end[2] - start[2]};
     const lsm_real du = lsm_dot3(d, e1), dv = lsm_dot3(d, e2);
     const lsm_real c = lsm_sqrt(du * du + dv * dv);
-    if (geom_same_point(start, end, e1, e2))
-        return false;
     const lsm_real h = (u1 * dv - v1 * du) / c;
     const lsm_real t = -((u1 + LSM_R(0.5) * du) * du + (v1 + LSM_R(0.5) * dv) * dv) / c; /* the move along d */
     if (!geom_shift_ok(t, c, r1))
@@ -173,16 +172,19 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
         return LSM_E_ARC_GEOMETRY;
     if (lsm_fabs(r1 - r2) > (lsm_real)LSM_GEOM_ARC_TOL_MM)
         return LSM_E_ARC_GEOMETRY;
-    /* Rounded I J K (CAM output) leave the end a little off the start's circle. Move the centre onto the
-     * perpendicular bisector of the chord, to its point nearest the programmed centre: shift t along the chord
-     * direction d, t = (r2² - r1²) / (2 |chord|); then both points lie on the circle and the arc ends exactly on
-     * the programmed end. Only while that shift stays within the radius tolerance (a nearly closed arc with
-     * a short chord keeps the programmed centre, and its end is off by at most |r1 - r2|). */
-    lsm_real cshift[3] = {LSM_R(0.0), LSM_R(0.0), LSM_R(0.0)};
+    lsm_real phi0, sweep;
 #if LSM_REAL_IS_FLOAT
-    const lsm_real ds_u = u1, ds_v = v1, r1_prog = r1; /* the programmed centre (geom_arc_bisector) */
+    /* Float: the bisector's circle from the programmed centre (u1, v1, r1) where it applies; the shift and the two end
+     * angles below only where it does not (a full circle, or a centre that would move too far) */
+    const bool same = geom_same_point(start, end, e1, e2);
+    if (same || !geom_arc_bisector(start, end, e1, e2, u1, v1, r1, dir, &r1, &phi0, &sweep))
 #endif
     {
+        /* Rounded I J K (CAM output) leave the end a little off the start's circle. Move the centre onto the
+         * perpendicular bisector of the chord, to its point nearest the programmed centre: shift t along the chord
+         * direction d, t = (r2² - r1²) / (2 |chord|); then both points lie on the circle and the arc ends exactly on
+         * the programmed end. Only while that shift stays within the radius tolerance (a nearly closed arc with
+         * a short chord keeps the programmed centre, and its end is off by at most |r1 - r2|). */
         const lsm_real du = u2 - u1, dv = v2 - v1;
         const lsm_real chord = lsm_sqrt(du * du + dv * dv);
         if (r1 != r2 && chord > LSM_R(16.0) * LSM_REAL_EPS * r1) {
@@ -190,25 +192,19 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
             if (geom_shift_ok(t, chord, r1)) {
                 const lsm_real su = t * du / chord, sv = t * dv / chord;
                 u1 -= su, v1 -= sv, u2 -= su, v2 -= sv;
-                for (int i = 0; i < 3; i++)
-                    cshift[i] = su * e1[i] + sv * e2[i];
                 r1 = lsm_sqrt(u1 * u1 + v1 * v1); /* the radius kept (the end's, r2, is equal up to rounding) */
             }
         }
+        phi0 = lsm_atan2(v1, u1);
+        const lsm_real phi1 = lsm_atan2(v2, u2);
+        sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
     }
-    lsm_real phi0 = lsm_atan2(v1, u1);
-    const lsm_real phi1 = lsm_atan2(v2, u2);
-    lsm_real sweep = geom_wrap_2pi(dir > 0 ? phi1 - phi0 : phi0 - phi1);
-#if LSM_REAL_IS_FLOAT
-    (void)geom_arc_bisector(start, end, e1, e2, ds_u, ds_v, r1_prog, dir, &r1, &phi0, &sweep);
-#endif
     /* end == start (to rounding) is a full circle */
-    const lsm_real cu = u2 - u1, cv = v2 - v1;
 #if LSM_REAL_IS_FLOAT
-    (void)cu, (void)cv;
-    if (sweep == LSM_R(0.0) || geom_same_point(start, end, e1, e2))
+    if (sweep == LSM_R(0.0) || same)
         sweep = (lsm_real)(2.0 * LSM_PI);
 #else
+    const lsm_real cu = u2 - u1, cv = v2 - v1;
     if (sweep == LSM_R(0.0) || lsm_sqrt(cu * cu + cv * cv) <= LSM_R(16.0) * LSM_REAL_EPS * r1)
         sweep = (lsm_real)(2.0 * LSM_PI);
 #endif
@@ -217,11 +213,8 @@ lsm_status lsm_geom_arc_init(lsm_geom *g, const lsm_real start[3], const lsm_rea
     g->plane = (uint8_t)plane;
     g->rotary_only = 0;
     g->reserved = 0;
-    const lsm_real ns = lsm_dot3(ds, n); /* start's offset from the centre along n */
     for (int i = 0; i < 3; i++) {
         g->u.arc.start_mm[i] = start[i];
-        (void)cshift;
-        (void)ns;
         g->u.arc.e1[i] = e1[i];
         g->u.arc.e2[i] = e2[i];
     }
@@ -474,8 +467,6 @@ lsm_status lsm_geom_trim_start(lsm_geom *g, lsm_real d)
     case LSM_GEOM_ARC: {
         lsm_geom_arc *a = &g->u.arc;
         const lsm_real f = d / g->len;
-        lsm_real n[3];
-        geom_arc_normal(a, n);
         lsm_real p[LSM_MAX_AXES] = {0};
         (void)lsm_geom_eval(g, d, p, NULL, NULL); /* the new start */
         for (int i = 0; i < 3; i++)

@@ -16,6 +16,10 @@
 #define RESCALE_FINE LSM_R(0.995)
 #define RESCALE_COARSE LSM_R(0.9)
 #define RESCALE_FINE_ITER 12
+/* A phase whose ratios as a whole are at least those a failing check has found (capped at 1) times 1 +
+ * PARTS_SKIP_SLACK is not checked in parts (parts_covered): the slack covers the rounding of the parts' ends, which
+ * are within the whole's in exact arithmetic (float: 1e-3 is over 10^4 ulp). */
+#define PARTS_SKIP_SLACK LSM_R(1e-3)
 /* Limits below this are no ramp at all (the fit gives up). */
 #define LIMIT_FLOOR LSM_R(1e-9)
 /* Tuning up a verified ramp: only when a ratio leaves this much room, to just below it, by at most TUNE_UP_MAX at a
@@ -322,7 +326,16 @@ typedef struct rcheck {
     int vviol;           /* a speed above a block's cap */
     lsm_real vx0, vx1;   /* that block's extent (x) */
     lsm_real vcap;       /* and its cap */
+    int cut;             /* a block's jerk ratio is CROSS_SHARE_TARGET (the acceleration ate its jerk budget): a
+                            part of the span may have a lower one (parts_covered) */
 } rcheck;
+
+static void rcheck_init(rcheck *res)
+{
+    res->ra = res->rj = res->rs = LSM_REAL_MAX;
+    res->vviol = 0;
+    res->cut = 0;
+}
 
 /* The ratios of one block (magnitude budgets of its coefficients; where they fail, the bounds of a planar curved
  * block in its frame too, each ratio the better of the two) into res (planner_int.h, lsm_pl_block_ratios). */
@@ -375,6 +388,7 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
     coef c;
     coef_get(b, &c);
     lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
+    bool cross_cut = false; /* rj cut to CROSS_SHARE_TARGET */
     if (m->amax > R0 && c.aa > R0) {
         const lsm_real al = (R1 - c.ba * m->v2) / c.aa;
         ra_acc = al > R0 ? al / m->amax : R0;
@@ -385,12 +399,15 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
         if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
             ra_cross = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
             rj = CROSS_SHARE_TARGET;
+            cross_cut = true;
         } else if (m->jmax > R0) {
             rj = (room - cross) / c.aj / m->jmax;
         }
     }
     if ((ra_acc < R1 || ra_cross < R1 || rj < R1) && b->g.kind == LSM_GEOM_CLOTHOID)
         frame_improve(pl, b, m, &c, res, &ra_acc, &ra_cross, &rj);
+    if (cross_cut && rj < R1)
+        res->cut = 1;
     res->ra = lsm_min2(res->ra, lsm_min2(ra_acc, ra_cross));
     res->rj = lsm_min2(res->rj, rj);
     if (m->sn > R0 && c.as > R0) {
@@ -400,8 +417,10 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
     }
 }
 
-/* One sub-interval [xa, xb] (either order) against the blocks it touches. */
-static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, const lsm_kin *q, lsm_real sn, rcheck *res)
+/* One sub-interval [xa, xb] (either order) against the blocks it touches: their caps, and unless caps_only their
+ * budgets. */
+static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, const lsm_kin *q, lsm_real sn,
+                       bool caps_only, rcheck *res)
 {
     kmag km;
     kmag_of(p, q, sn, &km);
@@ -427,7 +446,8 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
             }
             return;
         }
-        check_block(pl, b, m, res);
+        if (!caps_only)
+            check_block(pl, b, m, res);
         x += b->g.len;
         id++;
         if (!(x < xb) || id == pc->id_end)
@@ -441,70 +461,131 @@ void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, 
     pctx pc;
     lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
     rcheck res;
-    res.ra = res.rj = res.rs = LSM_REAL_MAX;
-    res.vviol = 0;
-    check_span(&pc, R0, R0, lo, hi, R0, &res);
+    rcheck_init(&res);
+    check_span(&pc, R0, R0, lo, hi, R0, false, &res);
     *ra = res.vviol ? R0 : res.ra;
     *rj = res.vviol ? R0 : res.rj;
 }
 
-/* Verifies a ramp placed at x_s (its start). */
-static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, rcheck *res)
+static bool rcheck_ok(const rcheck *c)
+{
+    return !c->vviol && c->ra >= R1 && c->rj >= R1 && c->rs >= R1;
+}
+
+static bool rcheck_fails(const rcheck *c)
+{
+    return c->ra < R1 || c->rj < R1 || c->rs < R1;
+}
+
+/* Can the parts of a phase lower none of the ratios a failed check reports (a check that already fails: its
+ * rescale takes only the ratios below 1)? Each part's ratio is at least the whole phase's (c: v, |a|, |j| of a part
+ * are within those of the whole, which the ratios fall with), except a jerk ratio cut to CROSS_SHARE_TARGET, whose
+ * part may drop to the other branch; so when the whole's ratios are at least those found so far, capped at 1, with
+ * PARTS_SKIP_SLACK for the rounding of the parts' ends, the parts' budgets are not needed. */
+static bool parts_covered(const rcheck *whole, const rcheck *res)
+{
+    const lsm_real k = R1 + PARTS_SKIP_SLACK;
+    return rcheck_fails(res) && !whole->vviol && !whole->cut && whole->ra >= lsm_min2(res->ra, R1) * k &&
+           whole->rj >= lsm_min2(res->rj, R1) * k && whole->rs >= lsm_min2(res->rs, R1) * k;
+}
+
+/* The parts of phase ph (from st, Q of them, ends at the eighths) against the blocks they cross: their budgets into
+ * res, or with caps_only their speeds alone; the phase's end in *end. True: a speed above a block's cap (res says
+ * where; the walk stops there). */
+static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, int Q, lsm_real sn,
+                        bool caps_only, rcheck *res, lsm_kin *end)
+{
+    const lsm_real dt = pc->pl->cfg.cycle_s, T = (lsm_real)ph->n_cycles * dt;
+    const lsm_real psn = ph->shape == LSM_PHASE_CONST ? R0 : sn;
+    lsm_kin prev = *st, cur;
+    for (int q = 1; q <= Q; q++) {
+        const int k8 = q * (8 / Q);
+        if (q == Q)
+            lsm_phase_end(ph, dt, st, &cur);
+        else
+            phase_at(ph, T, st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &cur);
+        check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, res);
+        if (res->vviol)
+            return true;
+        prev = cur;
+    }
+    *end = cur;
+    return false;
+}
+
+/* Verifies a ramp placed at x_s (its start). The shortcuts (quick; off only in the tests' reference walk,
+ * lsm_pl_ramp_verify) leave what the caller uses as the full walk has it: the verdict; the speed test's record; the
+ * ratios of a passing ramp; those below 1 of a failing one (its rescale takes no other); and the position cursor
+ * (its path: pc->cx adds up the block lengths it passes, so its rounding depends on the blocks it moved over). */
+static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck *res)
 {
     lsm_planner *pl = (lsm_planner *)pc->pl; /* statistics only */
     pl->stats.checks++;
-    res->ra = res->rj = res->rs = LSM_REAL_MAX;
-    res->vviol = 0;
+    rcheck_init(res);
     const lsm_real dt = pl->cfg.cycle_s;
     lsm_phase ph[7];
     lsm_scurve_phases(&r->iv, r->jp, ph);
     lsm_kin st = {R0, r->v0, R0, R0};
     const lsm_real sn = ramp_speak(r, dt);
     if (lsm_scurve_total_cycles(&r->iv) == 0) {
-        check_span(pc, x_s, x_s, &st, &st, R0, res);
+        check_span(pc, x_s, x_s, &st, &st, R0, false, res);
         return;
     }
     for (int p = 0; p < 7; p++) {
         const uint32_t n = ph[p].n_cycles;
         if (n == 0)
             continue;
-        const lsm_real T = (lsm_real)n * dt;
-        int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
-        lsm_kin prev = st, cur;
+        const int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
         if (Q > 1) {
             /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
              * end values, and they bound those of every part): where that holds, so do the parts; the finer
              * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
             lsm_kin e;
             lsm_phase_end(&ph[p], dt, &st, &e);
-            rcheck whole = *res;
-            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, &whole);
-            if (!whole.vviol && whole.ra >= R1 && whole.rj >= R1 && whole.rs >= R1) {
+            rcheck whole;
+            rcheck_init(&whole);
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false,
+                       &whole);
+            if (!rcheck_fails(res) && rcheck_ok(&whole)) {
                 res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
                 res->rj = lsm_min2(res->rj, whole.rj);
                 res->rs = lsm_min2(res->rs, whole.rs);
                 st = e;
                 continue;
             }
+            /* where the parts' budgets cannot matter, only their speeds are tested: a cap exceeded (the walk stops
+             * at the first part that exceeds one), or parts_covered */
+            if (quick && (whole.vviol || parts_covered(&whole, res))) {
+                const uint32_t cid = pc->cid; /* (the cursor, to walk the parts again from where the walk was) */
+                const lsm_real cx = pc->cx;
+                lsm_kin pe;
+                if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, true, res, &pe))
+                    return;
+                if (!whole.vviol) {
+                    st = pe;
+                    continue;
+                }
+                pc->cid = cid; /* no part exceeds a cap, by rounding: their budgets below */
+                pc->cx = cx;
+            }
         }
-        for (int q = 1; q <= Q; q++) {
-            const int k8 = q * (8 / Q);
-            if (q == Q)
-                lsm_phase_end(&ph[p], dt, &st, &cur);
-            else
-                phase_at(&ph[p], T, &st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &cur);
-            check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, res);
-            if (res->vviol)
-                return;
-            prev = cur;
-        }
-        st = cur;
+        if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, false, res, &st))
+            return;
     }
 }
 
-static bool rcheck_ok(const rcheck *c)
+void lsm_pl_ramp_verify(pctx *pc, const ramp *r, lsm_real x_s, bool quick, lsm_pl_verdict *out)
 {
-    return !c->vviol && c->ra >= R1 && c->rj >= R1 && c->rs >= R1;
+    rcheck res;
+    ramp_check(pc, r, x_s, quick, &res);
+    out->ok = rcheck_ok(&res);
+    out->vviol = res.vviol != 0;
+    out->ra = res.ra;
+    out->rj = res.rj;
+    out->rs = res.rs;
+    out->vx0 = res.vviol ? res.vx0 : R0;
+    out->vx1 = res.vviol ? res.vx1 : R0;
+    out->vcap = res.vviol ? res.vcap : R0;
 }
 
 /* Ramp-relative position where the speed equals c (the ramp is monotone; c between v0 and v1). */
@@ -528,27 +609,34 @@ static lsm_real ramp_pos_at_speed(const ramp *r, lsm_real dt, lsm_real c)
             const lsm_real tol = SPEED_POS_TOL_CYCLES * dt;
             const lsm_real dv_ph = e.v_mm_s - st.v_mm_s;
             lsm_real t = dv_ph != R0 ? hi * (c - st.v_mm_s) / dv_ph : hi;
+            lsm_kin m_hi; /* the state at hi, once evaluated there (hi_known) */
+            bool hi_known = false;
             for (int it = 0; it < SPEED_POS_ITER && hi - lo > tol; it++) {
                 if (!(t > lo && t < hi))
                     t = (lo + hi) / LSM_R(2.0);
                 lsm_kin m;
                 lsm_phase_advance(&ph[p], dt, &st, t, &m);
                 const bool past = up ? (m.v_mm_s >= c) : (m.v_mm_s <= c);
-                if (past)
+                if (past) {
                     hi = t;
-                else
+                    m_hi = m;
+                    hi_known = true;
+                } else {
                     lo = t;
+                }
                 const lsm_real step = m.a_mm_s2 != R0 ? (c - m.v_mm_s) / m.a_mm_s2 : hi - lo;
                 if (lsm_fabs(step) < tol) {
-                    if (!past)
-                        hi = lsm_min2(hi, t + tol); /* (v moves by a tol there: reached within rounding) */
+                    if (!past && t + tol < hi) {
+                        hi = t + tol; /* (v moves by a tol there: reached within rounding) */
+                        hi_known = false;
+                    }
                     break;
                 }
                 t += step;
             }
-            lsm_kin m;
-            lsm_phase_advance(&ph[p], dt, &st, hi, &m);
-            return m.s_mm;
+            if (!hi_known)
+                lsm_phase_advance(&ph[p], dt, &st, hi, &m_hi);
+            return m_hi.s_mm;
         }
         st = e;
     }
@@ -618,7 +706,7 @@ static int tune_ramp(pctx *pc, ramp *r, lsm_real v0, lsm_real v1, bool anchor_en
             }
             return 0;
         }
-        ramp_check(pc, r, x, c);
+        ramp_check(pc, r, x, true, c);
         if (c->vviol) {
             if (have) {
                 *r = best;

@@ -151,6 +151,18 @@ typedef struct ramp {
  * c v³ and 3 kappa v a and of j and kappa² v³ (planner.h, "Limits"; plan_ramp.c, check_block). */
 void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, const lsm_kin *hi, lsm_real *ra,
                          lsm_real *rj);
+/* What one verification of a ramp found (lsm_pl_ramp_verify): ok (every budget and cap holds), or a speed above a
+ * block's cap (vviol: that block's extent [vx0, vx1] and its cap vcap), else the ratios the ramp's a, j and snap may
+ * take (>= 1: that budget holds). */
+typedef struct lsm_pl_verdict {
+    bool ok, vviol;
+    lsm_real ra, rj, rs, vx0, vx1, vcap;
+} lsm_pl_verdict;
+
+/* The verification of ramp r placed at x_s as the ramp fitting runs it, with its shortcuts (quick) or without (the
+ * full walk: every phase, and in parts where the whole fails); for the tests (tests/plan/test_plan_verify.c: the two
+ * agree on what the fitting uses, and leave the cursor of pc in the same state). */
+void lsm_pl_ramp_verify(pctx *pc, const ramp *r, lsm_real x_s, bool quick, lsm_pl_verdict *out);
 /* Plans v0 -> v1 with the tangential limits a, j, s (strict whole-cycle rule); false if none. */
 bool lsm_pl_ramp_plan(ramp *r, lsm_real dt, lsm_real v0, lsm_real v1, lsm_real a, lsm_real j, lsm_real s);
 /* First guess of the tangential limits near x: the block's budgets at rest. */

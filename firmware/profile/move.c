@@ -435,6 +435,28 @@ static bool window_nc(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_rea
     return false;
 }
 
+/* For total t and T1 = n1 cycles, the n2 of the largest velocity capacity (see widest_of_total): into *iv and *best if
+ * it beats *best. */
+static void widest_of_n1(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t, uint32_t n1, lsm_scurve_intervals *iv,
+                         lsm_real *best)
+{
+    const lsm_real t1 = (lsm_real)n1 * dt;
+    const lsm_real jc = lsm_min2(sl->j_max_mm_s3, 2 * t1 * sl->snap_max_mm_s4 / (lsm_real)LSM_PI);
+    const lsm_real u = sl->a_max_mm_s2 / (jc * dt) - (lsm_real)n1; /* the crossing's n2 (real) */
+    const uint32_t n2_top = (t - 4u * n1) / 2u;
+    uint32_t n2 = 0;
+    if (u > 0)
+        n2 = u < (lsm_real)n2_top ? (uint32_t)u : n2_top;
+    for (uint32_t k = 0; k < 2 && n2 + k <= n2_top; k++) {
+        const lsm_scurve_intervals c = {n1, n2 + k, t - 4u * n1 - 2u * (n2 + k)};
+        const lsm_real cap = lsm_scurve_dv_capacity(sl, dt, &c);
+        if (cap > *best) {
+            *best = cap;
+            *iv = c;
+        }
+    }
+}
+
 /* How far from the sized T1 (cycles) widest_of_total looks: the sizing's n1 is near the best for its total. */
 #define WIDEST_N1_SPAN 2u
 
@@ -455,23 +477,8 @@ static void widest_of_total(const lsm_scurve_limits *sl, lsm_real dt, lsm_scurve
     lsm_real best = lsm_scurve_dv_capacity(sl, dt, iv);
     const uint32_t n1_lo = iv->n1_cycles > WIDEST_N1_SPAN ? iv->n1_cycles - WIDEST_N1_SPAN : 1;
     const uint32_t n1_hi = iv->n1_cycles + WIDEST_N1_SPAN;
-    for (uint32_t n1 = n1_lo; n1 <= n1_hi && 4u * n1 <= t; n1++) {
-        const lsm_real t1 = (lsm_real)n1 * dt;
-        const lsm_real jc = lsm_min2(sl->j_max_mm_s3, 2 * t1 * sl->snap_max_mm_s4 / (lsm_real)LSM_PI);
-        const lsm_real u = sl->a_max_mm_s2 / (jc * dt) - (lsm_real)n1; /* the crossing's n2 (real) */
-        const uint32_t n2_top = (t - 4u * n1) / 2u;
-        uint32_t n2 = 0;
-        if (u > 0)
-            n2 = u < (lsm_real)n2_top ? (uint32_t)u : n2_top;
-        for (uint32_t k = 0; k < 2 && n2 + k <= n2_top; k++) {
-            const lsm_scurve_intervals c = {n1, n2 + k, t - 4u * n1 - 2u * (n2 + k)};
-            const lsm_real cap = lsm_scurve_dv_capacity(sl, dt, &c);
-            if (cap > best) {
-                best = cap;
-                *iv = c;
-            }
-        }
-    }
+    for (uint32_t n1 = n1_lo; n1 <= n1_hi && 4u * n1 <= t; n1++)
+        widest_of_n1(sl, dt, t, n1, iv, &best);
 }
 
 /* *w: sh with each ramp's widest intervals of the same totals (widest_of_total); false if that is sh itself. */
@@ -525,17 +532,269 @@ static lsm_real alt_peak(int k, lsm_real vp, lsm_real v0, lsm_real v1, lsm_real 
 }
 
 /*
+ * The complete stage (single_plan's last): a search over the two ramps' totals Ta, Td (cycles) directly, rather
+ * than over sampled cruise feeds. A total's intervals are its widest: the largest velocity capacity C(T) over every
+ * n1 (and the best n2 for it, widest_of_n1) of that total; C is non-decreasing in T (n4 + 1 only adds to eq 34's
+ * denominator). With Ta, Td fixed, the cruise feed of nc cycles is vc = (2 D / dt - v0 Ta - v1 Td) / (Ta + Td + 2 nc)
+ * (eq (1) of move.h, in cycles), falling with nc, and the ramps (J_P corrected by eq 34) hold it exactly when vc lies
+ * in [v0 - C(Ta), v0 + C(Ta)] n [v1 - C(Td), v1 + C(Td)] n (0, v_max]: the pair's shortest cruise is a closed form.
+ * The domain: Ta up to the smallest total whose capacity reaches max(v0, v_max - v0) (any velocity change from v0 to a
+ * feed in [0, v_max]), Td likewise from v1, both capped at SEARCH_TOTALS and by the distance (total_cap); every cruise
+ * length. Stages:
+ *   0. ends_may_meet: O(1), no pair can bridge v0 and v1 (a bound of C from A and J alone): refuse;
+ *   1. fill_totals: the table of C(T) over the domain;
+ *   2. may_reach: the least distance any plan of the domain travels; D below it: refuse;
+ *   3. the pairs in order of Ta; each Td from the least whose band meets ramp A's (td_meet) to the largest whose vc
+ *      without cruise still reaches v0 - C(Ta) (td_reach), and only while Ta + Td is below the shortest plan found.
+ *      A pair that improves is verified exactly (window_nc on its widest intervals) before it is kept.
+ * Worst case: the table, SEARCH_TOTALS + 1 totals of about 2 WIDEST_N1_SPAN + 1 n1 each (2 capacities per n1); the
+ * certificate, 4 binary searches of the table per total; SEARCH_TOTALS² pair tries of a few operations; and
+ * SEARCH_VERIFY_MAX verifications of 2 x SEARCH_TOTALS / 4 n1 each. Stack: the table, SEARCH_TOTALS + 1 reals.
+ * Integer cycle counts throughout; the reals are products and quotients of feeds and counts (no trigonometry).
+ */
+#define SEARCH_TOTALS 256u    /* largest ramp total (cycles) searched: 65 536 pairs at worst; the table is 257 reals */
+#define SEARCH_VERIFY_MAX 64u /* exact verifications (each sizes two ramps' widest intervals); a few suffice */
+#define SEARCH_FIRST 4u       /* a ramp that changes the feed has n1 >= 1: at least 4 cycles */
+/* Relative slack of the reach bound (its rounding): the velocity changes it looks up are shrunk by it, so that the
+ * totals it takes are never above the true ones (a lower bound stays one). */
+#define REACH_SLACK (64 * LSM_REAL_EPS)
+
+typedef struct total_table {
+    lsm_real cap[SEARCH_TOTALS + 1]; /* C(T) (mm/s), for T <= filled */
+    uint32_t filled;                 /* the last total in the table */
+    uint32_t ta_max, td_max;         /* the domain: Ta <= ta_max, Td <= td_max */
+} total_table;
+
+/* The widest intervals of total t into *iv; returns their capacity (0 below SEARCH_FIRST cycles). For the best n2 the
+ * capacity rises with n1 while the snap's jerk cap 2 t1 DJ / pi binds and falls once J or A caps it, and the best n1
+ * grows with t: the scan starts WIDEST_N1_SPAN below n1_from (the previous total's) and climbs while the top of its
+ * window improves. (Against a scan of every n1: the same capacity within 2 ulp on 5.1e6 random totals; the plan is
+ * verified on widest_all's intervals, whose capacity is never below this one.) */
+static lsm_real widest_intervals(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t, uint32_t n1_from,
+                                 lsm_scurve_intervals *iv)
+{
+    lsm_real best = 0;
+    iv->n1_cycles = iv->n2_cycles = 0;
+    iv->n4_cycles = t;
+    uint32_t top = n1_from + WIDEST_N1_SPAN;
+    for (uint32_t n1 = n1_from > WIDEST_N1_SPAN ? n1_from - WIDEST_N1_SPAN : 1; n1 <= top && 4u * n1 <= t; n1++) {
+        widest_of_n1(sl, dt, t, n1, iv, &best);
+        if (iv->n1_cycles == n1 && n1 + WIDEST_N1_SPAN > top)
+            top = n1 + WIDEST_N1_SPAN; /* still climbing */
+    }
+    return best;
+}
+
+/* The widest intervals of total t over every n1 (at least the table's capacity: the plan found is verified on these). */
+static void widest_all(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t, lsm_scurve_intervals *iv)
+{
+    lsm_real best = 0;
+    iv->n1_cycles = iv->n2_cycles = 0;
+    iv->n4_cycles = t;
+    for (uint32_t n1 = 1; 4u * n1 <= t; n1++)
+        widest_of_n1(sl, dt, t, n1, iv, &best);
+}
+
+/* The move's ends in the search's units: 2 D / dt (mm/s times cycles), the end feeds and v_max. */
+typedef struct move_ends {
+    lsm_real d2_dt, v0, v1, vmax;
+} move_ends;
+
+/* The longest ramp from (or to) feed v that the distance allows: it alone travels more than v T (times dt / 2). */
+static uint32_t total_cap(const move_ends *e, lsm_real v)
+{
+    const lsm_real t = v > 0 ? e->d2_dt / v : (lsm_real)SEARCH_TOTALS;
+    return t < (lsm_real)SEARCH_TOTALS ? (uint32_t)t : SEARCH_TOTALS;
+}
+
+/* An upper bound of C(T) from the limits alone: over T dt the acceleration stays within A and within J times the time
+ * to the nearer end, so no ramp of T cycles changes the feed by more than min(A T dt, J (T dt)² / 4). */
+static lsm_real cap_bound(const lsm_scurve_limits *sl, lsm_real dt, uint32_t t)
+{
+    const lsm_real tp = (lsm_real)t * dt;
+    return lsm_min2(sl->a_max_mm_s2 * tp, sl->j_max_mm_s3 * tp * tp / 4);
+}
+
+/* Stage 0: false if no pair of the domain can bridge v0 and v1 (their bands never meet): O(1), before the table. */
+static bool ends_may_meet(const lsm_scurve_limits *sl, lsm_real dt, const move_ends *e)
+{
+    const lsm_real reach = cap_bound(sl, dt, total_cap(e, e->v0)) + cap_bound(sl, dt, total_cap(e, e->v1));
+    return lsm_fabs(e->v1 - e->v0) <= reach * (1 + REACH_SLACK);
+}
+
+/* Stage 1: C(T) up to the domain's totals: those that make any velocity change from v0 (from v1), capped by the
+ * distance (total_cap) and by SEARCH_TOTALS. */
+static void fill_totals(const lsm_scurve_limits *sl, lsm_real dt, const move_ends *e, total_table *tb)
+{
+    const lsm_real need_a = lsm_max2(e->v0, e->vmax - e->v0), need_d = lsm_max2(e->v1, e->vmax - e->v1);
+    tb->ta_max = total_cap(e, e->v0);
+    tb->td_max = total_cap(e, e->v1);
+    bool found_a = false, found_d = false;
+    uint32_t n1 = 1, t = 0;
+    for (;; t++) {
+        lsm_scurve_intervals iv;
+        tb->cap[t] = widest_intervals(sl, dt, t, n1, &iv);
+        n1 = iv.n1_cycles > 0 ? iv.n1_cycles : 1;
+        if (!found_a && (tb->cap[t] >= need_a || t == tb->ta_max)) {
+            found_a = true;
+            tb->ta_max = t;
+        }
+        if (!found_d && (tb->cap[t] >= need_d || t == tb->td_max)) {
+            found_d = true;
+            tb->td_max = t;
+        }
+        if (found_a && found_d)
+            break;
+    }
+    tb->filled = t;
+}
+
+/* Stage 3's pair test: the shortest cruise (cycles, into *nc) with which the pair (ta, td) lands on D and both ramps
+ * hold vc by the table's capacities; false if none. */
+static bool pair_cruise(const total_table *tb, const move_ends *e, uint32_t ta, uint32_t td, lsm_real *nc)
+{
+    const lsm_real ca = tb->cap[ta], cd = tb->cap[td];
+    const lsm_real lo = lsm_max2(e->v0 - ca, e->v1 - cd);
+    const lsm_real hi = lsm_min2(lsm_min2(e->v0 + ca, e->v1 + cd), e->vmax);
+    const lsm_real num = e->d2_dt - e->v0 * (lsm_real)ta - e->v1 * (lsm_real)td, m = (lsm_real)(ta + td);
+    if (!(hi > 0) || hi < lo || !(num > 0))
+        return false;
+    const lsm_real z = lsm_max2(lsm_ceil((num / hi - m) / 2), 0);
+    if (lo > 0 && z > (num / lo - m) / 2)
+        return false; /* the window of cruise lengths holds no whole cycle */
+    *nc = z;
+    return true;
+}
+
+/* The largest Td for which vc with no cruise still reaches lo_a = v0 - C(Ta) (no cruise can raise it), capped. */
+static uint32_t td_reach(const total_table *tb, const move_ends *e, uint32_t ta)
+{
+    const lsm_real lo_a = lsm_max2(e->v0 - tb->cap[ta], 0), den = e->v1 + lo_a;
+    if (!(den > 0))
+        return tb->td_max;
+    const lsm_real y = (e->d2_dt - (e->v0 + lo_a) * (lsm_real)ta) / den;
+    if (!(y >= (lsm_real)SEARCH_FIRST))
+        return 0;
+    return y < (lsm_real)tb->td_max ? (uint32_t)y : tb->td_max;
+}
+
+/* The smallest total whose capacity reaches dv (exceeds it, if `strict`); filled + 1 if none in the table. */
+static uint32_t table_total(const total_table *tb, lsm_real dv, bool strict)
+{
+    uint32_t lo = 0, hi = tb->filled + 1; /* the answer is in [lo, hi] */
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (strict ? tb->cap[mid] > dv : tb->cap[mid] >= dv)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+/* The least total a ramp between feed v and a cruise feed just above b needs (a lower bound of it). */
+static uint32_t total_above(const total_table *tb, lsm_real v, lsm_real b)
+{
+    const lsm_real keep = 1 - REACH_SLACK;
+    return b < v ? table_total(tb, (v - b) * keep, false) : table_total(tb, (b - v) * keep, true);
+}
+
+/* The distance (2 D / dt units) of ramps of x and y cycles with cruise feed b and no cruise. */
+static lsm_real reach(const move_ends *e, lsm_real b, uint32_t x, uint32_t y)
+{
+    return (e->v0 + b) * (lsm_real)x + (b + e->v1) * (lsm_real)y;
+}
+
+/*
+ * Stage 2: a certificate of infeasibility. A plan with cruise feed vc has ramps of at least X(vc), Y(vc) cycles (the
+ * smallest totals whose capacities reach |vc - v0|, |vc - v1|), so it travels at least
+ * g(vc) = (v0 + vc) X(vc) + (vc + v1) Y(vc) (times dt / 2). X and Y are steps in vc; between their steps g rises
+ * linearly, so its least value over (0, v_max] is at 0 or just above a step of X (v0 - C(T), v0 + C(T - 1): X = T
+ * there) or of Y (the same about v1). Only the segments of vc whose X and Y are within the search's domain count.
+ * False if 2 D / dt is below all of them: then the domain holds no plan. At most 4 steps per filled total, each with
+ * one binary search of the table.
+ */
+static bool may_reach(const total_table *tb, const move_ends *e)
+{
+    const lsm_real need = e->d2_dt * (1 + REACH_SLACK);
+    const uint32_t x0 = total_above(tb, e->v0, 0), y0 = total_above(tb, e->v1, 0);
+    if (x0 <= tb->ta_max && y0 <= tb->td_max && reach(e, 0, x0, y0) <= need)
+        return true;
+    for (uint32_t t = 1; t <= tb->filled; t++) {
+        if (!(tb->cap[t] > tb->cap[t - 1]))
+            continue; /* no step at t */
+        const lsm_real steps[4] = {e->v0 - tb->cap[t], e->v0 + tb->cap[t - 1], e->v1 - tb->cap[t],
+                                   e->v1 + tb->cap[t - 1]};
+        for (int k = 0; k < 4; k++) {
+            const lsm_real b = steps[k];
+            if (!(b >= 0 && b <= e->vmax))
+                continue;
+            const bool of_a = k < 2; /* a step of X (else of Y) */
+            if ((of_a ? e->v0 + b : b + e->v1) * (lsm_real)t > need)
+                continue; /* that ramp alone goes too far */
+            const uint32_t x = of_a ? t : total_above(tb, e->v0, b), y = of_a ? total_above(tb, e->v1, b) : t;
+            if (x <= tb->ta_max && y <= tb->td_max && reach(e, b, x, y) <= need)
+                return true;
+        }
+    }
+    return false;
+}
+
+/* The least Td whose capacity can meet ramp A's band [v0 - C(Ta), v0 + C(Ta)] from v1 (a lower bound of it). */
+static uint32_t td_meet(const total_table *tb, const move_ends *e, uint32_t ta)
+{
+    const lsm_real gap = lsm_max2(e->v1 - (e->v0 + tb->cap[ta]), (e->v0 - tb->cap[ta]) - e->v1);
+    const uint32_t t = gap > 0 ? table_total(tb, gap * (1 - REACH_SLACK), false) : 0;
+    return t > SEARCH_FIRST ? t : SEARCH_FIRST;
+}
+
+/* The complete stage: the shortest exact plan of the domain into *best; false if the domain holds none. */
+static bool search_totals(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
+{
+    const lsm_scurve_limits sl = ramp_limits(L);
+    const move_ends e = {2 * D / dt, v0, v1, L->v_max_mm_s};
+    if (!ends_may_meet(&sl, dt, &e))
+        return false;
+    total_table tb;
+    fill_totals(&sl, dt, &e, &tb);
+    if (!may_reach(&tb, &e))
+        return false;
+    uint32_t best_n = UINT32_MAX, verified = 0;
+    for (uint32_t ta = SEARCH_FIRST; ta <= tb.ta_max && ta + SEARCH_FIRST < best_n; ta++) {
+        const uint32_t td_hi = td_reach(&tb, &e, ta);
+        for (uint32_t td = td_meet(&tb, &e, ta); td <= td_hi && ta + td < best_n; td++) {
+            lsm_real nc;
+            if (!pair_cruise(&tb, &e, ta, td, &nc) || !((lsm_real)(ta + td) + nc < (lsm_real)best_n))
+                continue;
+            if (verified++ >= SEARCH_VERIFY_MAX)
+                return best_n < UINT32_MAX;
+            shape sh;
+            widest_all(&sl, dt, ta, &sh.acc);
+            widest_all(&sl, dt, td, &sh.dec);
+            if (window_nc(L, dt, D, v0, v1, &sh) && ta + td + sh.nc < best_n) {
+                best_n = ta + td + sh.nc;
+                *best = sh;
+            }
+        }
+    }
+    return best_n < UINT32_MAX;
+}
+
+/*
  * One axis alone, strict rule: the fastest whole-cycle shape that lands exactly on D. Tries the minimal-time
  * peak vp* first (the usual answer). Otherwise (short moves between feeds whose remainder a quantised ramp
  * cannot absorb) it tries other cruise feeds: peaks above vp* (ramps with more velocity capacity), an even grid
  * below max(v0, v1), and feeds geometrically close to each end feed (a cruise lingering just above or below v0
  * or v1, the only exact shapes when D exceeds the direct ramp's distance by less than a short ramp travels at
  * the far feed), each also with its ramps stretched at T4 (more capacity for a little more time); keeps the
- * shortest that fits.
+ * shortest that fits. Where all of these fail, and where D is below the direct ramp's distance, the complete search
+ * over the ramp totals (search_totals) decides: it plans whenever its domain holds an exact plan.
  */
 static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D, lsm_real v0, lsm_real v1, shape *best)
 {
     lsm_status st = strict_peak_shape(L, dt, D, v0, v1, best);
+    if (st == LSM_E_INFEASIBLE) /* D below the direct ramp's: a descent through a lower feed may still land */
+        return search_totals(L, dt, D, v0, v1, best) ? LSM_OK : LSM_E_INFEASIBLE;
     if (st != LSM_OK)
         return st;
     if (window_nc_wide(L, dt, D, v0, v1, best))
@@ -584,7 +843,9 @@ static lsm_status single_plan(const lsm_axis_limits *L, lsm_real dt, lsm_real D,
             }
         }
     }
-    return best_total < UINT64_MAX ? LSM_OK : LSM_E_INFEASIBLE;
+    if (best_total < UINT64_MAX)
+        return LSM_OK;
+    return search_totals(L, dt, D, v0, v1, best) ? LSM_OK : LSM_E_INFEASIBLE;
 }
 
 static bool axis_still(const lsm_move_request *req, unsigned i)

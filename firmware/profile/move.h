@@ -16,7 +16,10 @@
  * A = J = 0. When D is short the profile shortens: the peak feed vp < v_max is the largest whose quantised
  * ramps travel at most D, and the cruise may vanish. That distance is step-wise linear in vp (one line per pair
  * of ramp totals), so the search (move.c, strict rule) tries the roots of those lines, starting from rest at the
- * continuous model's peak: about 2.4 ramp sizings per axis.
+ * continuous model's peak: about 2.4 ramp sizings per axis. Where no cruise length makes that shape exact (short moves
+ * between feeds), other intervals and cruise feeds are tried, and last a search over the two ramps' totals (whole
+ * cycles, up to 256 each) with every cruise length: if such a plan exists, the move is planned (move.c,
+ * search_totals; tests/profile/test_move_complete.c checks it against a brute force).
  *
  * Synchronisation: every axis has its own limits, distance and feeds. Each axis is first planned alone; all
  * axes then share the intervals (ta, tc, td split into n1, n2, n4) of the slowest one, and every axis gets its

@@ -1,0 +1,228 @@
+/*
+ * test_plan_verify.c: the shortcuts of a ramp's verification (plan_ramp.c, ramp_check) leave what the ramp fitting
+ * uses exactly as the full walk has it. Built twice (double, float).
+ *
+ *   test_plan_verify [seed] [count]      (default: seed 1, count 2000 programs)
+ *
+ * The full walk checks every phase of the ramp as a whole and, where the whole fails, in parts (eighths): the
+ * budgets and the caps of every block each part crosses. The shortcuts: a phase whose whole exceeds a cap has its
+ * parts' speeds tested before their budgets; once the ramp fails, a phase whose whole's ratios cover those found so
+ * far (capped at 1, parts_covered) has only its parts' speeds tested. What the fitting uses, and this test compares
+ * bit for bit: the verdict; whether a speed exceeds a cap and that block's extent and cap; the ratios of a passing
+ * ramp (its tune-up takes them); the ratios of a failing one, capped at 1 (its rescale takes those below 1); and the
+ * state of the position cursor after the walk (its rounding depends on its path: later positions start from it).
+ *
+ * Each program is a random machine (unequal X Y Z limits, path limits on some) and random lines (corners blended:
+ * clothoid pairs), arcs (G17/18/19, some helical) and dense polylines; on it, random ramps (speeds up to above the
+ * caps, limits from well below to well above the budgets at rest) placed at random points. The test also counts
+ * the cases each shortcut decides, and requires some of each: it must be able to fail.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "lsm_test_rng.h"
+#include "planner.h"
+#include "planner_int.h"
+
+#define CAP 96
+#define RAMPS_PER_PROGRAM 160
+
+static unsigned long g_seed = 1;
+static long g_count = 2000;
+
+typedef struct tally {
+    long ramps, ok, fail, vviol, fail_both; /* fail_both: failing on a and on j */
+} tally;
+
+/* A random machine: X Y Z with unequal limits; path limits on some. */
+static void machine(uint64_t *st, lsm_planner_config *cfg)
+{
+    lsm_planner_default_config(cfg);
+    cfg->cycle_s = (lsm_real)test_uni(st, 0.0005, 0.004);
+    cfg->axis_mask = 0x7;
+    for (int i = 0; i < 3; i++) {
+        cfg->axis[i].v_max = (lsm_real)test_logu(st, 50, 1000);
+        cfg->axis[i].a_max = (lsm_real)test_logu(st, 500, 20000);
+        cfg->axis[i].j_max = (lsm_real)test_logu(st, 2000, 1e6);
+        cfg->axis[i].snap_max = (lsm_real)test_logu(st, 1e6, 1e9);
+    }
+    if (test_urand(st) < 0.3) {
+        cfg->path_a_max_mm_s2 = (lsm_real)test_logu(st, 300, 20000);
+        cfg->path_j_max_mm_s3 = (lsm_real)test_logu(st, 1000, 1e6);
+    }
+}
+
+static lsm_status append_arc(lsm_planner *pl, uint64_t *st, double p[3], const lsm_planner_move *mv)
+{
+    static const lsm_geom_plane planes[3] = {LSM_GEOM_PLANE_XY, LSM_GEOM_PLANE_ZX, LSM_GEOM_PLANE_YZ};
+    static const int axes[3][3] = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}; /* e1, e2, n of each plane */
+    const int pi = (int)(test_urand(st) * 3) % 3;
+    const double r = test_logu(st, 0.1, 30), ph = test_uni(st, 0, 6.283185307179586);
+    const double sw = test_uni(st, 0.2, 4.0), dir = test_urand(st) < 0.5 ? 1.0 : -1.0;
+    double c[3] = {p[0], p[1], p[2]}, e[3] = {p[0], p[1], p[2]};
+    const int *ax = axes[pi];
+    c[ax[0]] = p[ax[0]] - r * cos(ph);
+    c[ax[1]] = p[ax[1]] - r * sin(ph);
+    e[ax[0]] = c[ax[0]] + r * cos(ph + dir * sw);
+    e[ax[1]] = c[ax[1]] + r * sin(ph + dir * sw);
+    if (test_urand(st) < 0.2)
+        e[ax[2]] += test_uni(st, -2, 2); /* a helix */
+    const lsm_real el[3] = {(lsm_real)e[0], (lsm_real)e[1], (lsm_real)e[2]};
+    const lsm_real cl[3] = {(lsm_real)c[0], (lsm_real)c[1], (lsm_real)c[2]};
+    const lsm_status s = lsm_planner_append_arc(pl, el, cl, planes[pi], (int)dir, 0, mv);
+    if (s == LSM_OK)
+        memcpy(p, e, sizeof e);
+    return s;
+}
+
+static lsm_status append_line(lsm_planner *pl, double p[3], const double d[3], double len, const lsm_planner_move *mv)
+{
+    lsm_real e[LSM_MAX_AXES] = {0};
+    for (int i = 0; i < 3; i++)
+        e[i] = (lsm_real)(p[i] + len * d[i]);
+    const lsm_status s = lsm_planner_append_line(pl, e, mv);
+    if (s == LSM_OK)
+        for (int i = 0; i < 3; i++)
+            p[i] = (double)e[i];
+    return s;
+}
+
+/* Appends one random line, arc or short dense polyline (0.1-0.5 mm chords of a curve) from p (updated to its end). */
+static void append_one(lsm_planner *pl, uint64_t *st, double p[3])
+{
+    const lsm_planner_move mv = {(lsm_real)test_logu(st, 5, 300), (lsm_real)test_logu(st, 2e-3, 0.1), 0, 0};
+    const double u = test_urand(st);
+    if (u < 0.3) {
+        (void)append_arc(pl, st, p, &mv); /* (an arc that does not fit is refused: the next item is tried) */
+        return;
+    }
+    double h = test_uni(st, 0, 6.283185307179586);
+    if (u < 0.65) {
+        const double d[3] = {cos(h), sin(h), test_urand(st) < 0.5 ? 0.0 : test_uni(st, -0.5, 0.5)};
+        const double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const double dn[3] = {d[0] / n, d[1] / n, d[2] / n};
+        (void)append_line(pl, p, dn, test_logu(st, 0.05, 20), &mv);
+        return;
+    }
+    const double turn = test_uni(st, -0.08, 0.08); /* a curve of chords */
+    for (int k = 0; k < 8; k++) {
+        h += turn;
+        const double d[3] = {cos(h), sin(h), 0};
+        (void)append_line(pl, p, d, test_uni(st, 0.1, 0.5), &mv);
+    }
+}
+
+static double fmin1(lsm_real r)
+{
+    return r < (lsm_real)1 ? (double)r : 1.0;
+}
+
+/* The shortcut walk against the full one on ramp r at x_s, both from the cursor of pc. */
+static void compare(const pctx *pc, const ramp *r, lsm_real x_s, long prog, long k, tally *t)
+{
+    lsm_pl_verdict q, f;
+    pctx pq = *pc, pf = *pc;
+    lsm_pl_ramp_verify(&pf, r, x_s, false, &f);
+    lsm_pl_ramp_verify(&pq, r, x_s, true, &q);
+    t->ramps++;
+    if (q.ok != f.ok || q.vviol != f.vviol)
+        fail_msg("program %ld ramp %ld: verdict %d (above a cap %d), full walk %d (%d)", prog, k, q.ok, q.vviol, f.ok,
+                 f.vviol);
+    if (pq.cid != pf.cid || pq.cx != pf.cx)
+        fail_msg("program %ld ramp %ld: cursor at block %u, x %.17g; full walk %u, %.17g", prog, k, (unsigned)pq.cid,
+                 (double)pq.cx, (unsigned)pf.cid, (double)pf.cx);
+    if (f.vviol) {
+        t->vviol++;
+        if (q.vx0 != f.vx0 || q.vx1 != f.vx1 || q.vcap != f.vcap)
+            fail_msg("program %ld ramp %ld: cap record [%.17g %.17g] %.17g, full walk [%.17g %.17g] %.17g", prog, k,
+                     (double)q.vx0, (double)q.vx1, (double)q.vcap, (double)f.vx0, (double)f.vx1, (double)f.vcap);
+    } else if (f.ok) {
+        t->ok++;
+        if (q.ra != f.ra || q.rj != f.rj || q.rs != f.rs)
+            fail_msg("program %ld ramp %ld: passing ratios %.17g %.17g %.17g, full walk %.17g %.17g %.17g", prog, k,
+                     (double)q.ra, (double)q.rj, (double)q.rs, (double)f.ra, (double)f.rj, (double)f.rs);
+    } else {
+        t->fail++;
+        if (fmin1(q.ra) != fmin1(f.ra) || fmin1(q.rj) != fmin1(f.rj) || fmin1(q.rs) != fmin1(f.rs))
+            fail_msg("program %ld ramp %ld: failing ratios %.17g %.17g %.17g, full walk %.17g %.17g %.17g", prog, k,
+                     fmin1(q.ra), fmin1(q.rj), fmin1(q.rs), fmin1(f.ra), fmin1(f.rj), fmin1(f.rs));
+        if (fmin1(f.ra) < 1.0 && fmin1(f.rj) < 1.0)
+            t->fail_both++;
+    }
+}
+
+/* Random ramps on the program in pl: from a random block, speeds up to 1.1 x its cap (a quarter: the highest cap),
+ * limits 0.1-4 x the budgets at rest there, at random points of the piece (some running past its end). */
+static void ramps_on(lsm_planner *pl, uint64_t *st, long prog, tally *t)
+{
+    const uint32_t n = lsm_planner_count(pl);
+    lsm_real vmax = 0;
+    for (uint32_t id = pl->head; id != pl->tail; id++)
+        vmax = lsm_max2(vmax, cap_of(pl, id));
+    if (n == 0 || !(vmax > 0))
+        return;
+    const lsm_real dt = pl->cfg.cycle_s;
+    for (long k = 0; k < RAMPS_PER_PROGRAM; k++) {
+        const uint32_t id0 = pl->head + (uint32_t)(test_urand(st) * n) % n;
+        pctx pc;
+        lsm_pl_pctx_init(&pc, pl, id0, 0, pl->tail);
+        lsm_real a, j, s;
+        lsm_pl_guess_limits(&pc, 0, &a, &j, &s);
+        const lsm_real vtop = test_urand(st) < 0.25 ? vmax : cap_of(pl, id0); /* (mostly the caps where it starts) */
+        const lsm_real v0 = (lsm_real)(test_urand(st) < 0.2 ? 0.0 : test_uni(st, 0, 1.1) * vtop);
+        const lsm_real v1 = (lsm_real)(test_uni(st, 0, 1.1) * vtop);
+        ramp r;
+        if (!lsm_pl_ramp_plan(&r, dt, v0, v1, a * (lsm_real)test_logu(st, 0.1, 4), j * (lsm_real)test_logu(st, 0.1, 4),
+                              s * (lsm_real)test_logu(st, 0.1, 4)))
+            continue;
+        const lsm_real x_s = (lsm_real)(test_urand(st) * (double)pc.D);
+        compare(&pc, &r, x_s, prog, k, t);
+    }
+}
+
+static void test_shortcuts_exact(void **state)
+{
+    (void)state;
+    tally t;
+    memset(&t, 0, sizeof t);
+    static lsm_pblock store[CAP];
+    static lsm_planner pl;
+    for (long prog = 0; prog < g_count; prog++) {
+        uint64_t st = (uint64_t)g_seed * 0x9E3779B97F4A7C15ull + (uint64_t)prog * 0xD1B54A32D192ED69ull + 7u;
+        lsm_planner_config cfg;
+        machine(&st, &cfg);
+        const lsm_real start[LSM_MAX_AXES] = {0};
+        assert_int_equal(lsm_planner_init(&pl, &cfg, store, CAP, start), LSM_OK);
+        double p[3] = {0, 0, 0};
+        for (int m = 0; m < 24 && lsm_planner_free(&pl) > 24; m++)
+            append_one(&pl, &st, p);
+        assert_int_equal(lsm_planner_flush(&pl), LSM_OK);
+        ramps_on(&pl, &st, prog, &t);
+    }
+    print_message("ramps %ld: pass %ld, fail on the budgets %ld (on a and j %ld), above a cap %ld\n", t.ramps, t.ok,
+                  t.fail, t.fail_both, t.vviol);
+    /* every kind of outcome was exercised (each shortcut decides one of them) */
+    assert_true(t.fail_both * 100 > t.ramps);
+    assert_true(t.ok * 20 > t.ramps);
+    assert_true(t.fail * 20 > t.ramps);
+    assert_true(t.vviol * 20 > t.ramps);
+}
+
+int main(int argc, char **argv)
+{
+    g_seed = (unsigned long)test_arg_u(argc, argv, 1, 1);
+    g_count = (long)test_arg_u(argc, argv, 2, 2000);
+    print_message("seed %lu, count %ld\n", g_seed, g_count);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_shortcuts_exact),
+    };
+    return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
+}

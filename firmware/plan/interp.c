@@ -590,7 +590,9 @@ static bool stale_replaces_at(const lsm_interp *ip, const swpt *w)
 {
     if (!ip->running || CUR(ip).hold || !lsm_planner_piece_stale(ip->pl))
         return false;
-    return w->kind == LSM_INTERP_SW_SAMPLE ||
+    /* (a sample lead_cycles ahead is not: the planner verified a piece from the last sample, its commitment point, and
+     * a normal piece planned further on may be its fallback stop; there the step replaces the piece at once) */
+    return (w->kind == LSM_INTERP_SW_SAMPLE && w->cycle == ip->cycles + 1u) ||
            (w->kind == LSM_INTERP_SW_BOUNDARY && (w->phase == 8u || w->phase == 16u));
 }
 
@@ -649,17 +651,19 @@ static bool skipped(const lsm_interp *ip, const swpt *w)
 }
 
 /* Why the step plans a piece itself (interp.h, lsm_interp_tick_cause); `successor`: the piece after one that ended. */
-static uint8_t tick_cause(const lsm_interp *ip, bool successor)
+static uint8_t tick_cause(const lsm_interp *ip, uint8_t hint)
 {
     if (!ip->bg)
         return LSM_INTERP_TP_NO_PREPARE;
     if (ip->bg_cycles + 1u != ip->cycles || ip->bg_gen != ip->pl->gen || ip->bg_hold != ip->hold_req)
         return LSM_INTERP_TP_LATE; /* (a piece is made stale only with a new generation) */
-    return successor && ip->took_cycle == ip->cycles ? LSM_INTERP_TP_SHORT : LSM_INTERP_TP_MISSED;
+    if (hint == LSM_INTERP_TP_SHORT)
+        return ip->took_cycle == ip->cycles ? LSM_INTERP_TP_SHORT : LSM_INTERP_TP_MISSED;
+    return hint;
 }
 
 /* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
-static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, bool successor)
+static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t hint)
 {
     lsm_interp_prep *q = &ip->prep;
     if (same_switch(ip, q, w)) {
@@ -671,19 +675,19 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, bool succ
     if (skipped(ip, w))
         return NULL; /* failed in the background, which prepared the piece after it */
     ip->tick_plans++;
-    ip->tick_cause[tick_cause(ip, successor)]++;
+    ip->tick_cause[tick_cause(ip, hint)]++;
     return plan_switch(ip, w) == LSM_OK ? q : NULL;
 }
 
 /* piece_for, and where the geometry the current piece runs into has changed (piece_stale) and nothing fits in mode
  * w->mode, a piece planned normally instead: a new piece must start here (a verified one, or at worst a verified
  * stop). */
-static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w)
+static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w, uint8_t hint)
 {
-    const lsm_interp_prep *q = piece_for(ip, w, false);
+    const lsm_interp_prep *q = piece_for(ip, w, hint);
     if ((q == NULL || !(NXT(ip).T_s > R0)) && lsm_planner_piece_stale(ip->pl)) {
         w->mode = LSM_PIECE_NORMAL;
-        q = piece_for(ip, w, false);
+        q = piece_for(ip, w, hint);
     }
     return q;
 }
@@ -997,7 +1001,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 ahead(ip, ds > R0 ? PATH_DS(ip, ds) : R0, &w.blk, &w.off);
                 w.v = CUR(ip).st[ip->phase].v_mm_s;
             }
-            const lsm_interp_prep *q = replacement_for(ip, &w);
+            const lsm_interp_prep *q = replacement_for(ip, &w, LSM_INTERP_TP_MISSED);
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
@@ -1024,7 +1028,8 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         w.blk = ip->blk;
         w.off = ip->off_mm;
         w.v = ip->v_mm_s;
-        const lsm_interp_prep *q = piece_for(ip, &w, true); /* (serial is still the ended piece's: its successor) */
+        const lsm_interp_prep *q =
+            piece_for(ip, &w, LSM_INTERP_TP_SHORT); /* (serial is still the ended piece's: its successor) */
         if (q == NULL || !(NXT(ip).T_s > R0))
             return;
         take(ip, q, left, false);
@@ -1085,7 +1090,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             if (ip->v_mm_s == R0 && ip->hold_req) {
                 ip->state = LSM_INTERP_HELD; /* a hold at rest */
             } else if (next_switch(ip, &w)) {
-                const lsm_interp_prep *q = piece_for(ip, &w, false);
+                const lsm_interp_prep *q = piece_for(ip, &w, LSM_INTERP_TP_MISSED);
                 if (q != NULL && NXT(ip).T_s > R0)
                     take(ip, q, dt, false);
                 else if (!path_ahead(ip))
@@ -1115,7 +1120,9 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             w.blk = ip->blk;
             w.off = ip->off_mm;
             w.v = ip->v_mm_s;
-            q = replacement_for(ip, &w);
+            /* (a stale piece at lead_cycles > 0 whose replacement prepared ahead failed: TP_STALE) */
+            const bool stale_lead = ip->bg && ip->lead_cycles > 0u && lsm_planner_piece_stale(pl);
+            q = replacement_for(ip, &w, stale_lead ? LSM_INTERP_TP_STALE : LSM_INTERP_TP_MISSED);
             if (q != NULL)
                 take(ip, q, dt, true);
             else if (is_cruise(ip->phase) && w.mode == LSM_PIECE_REPLAN)

@@ -61,7 +61,7 @@
  *     that ends its cruise (a cruise shorter than lead_cycles + 1 cycles), and the step stops at a boundary only for
  *     a piece of the mode it asks for (a piece left from a hold since cancelled is not taken).
  * What remains for the step: TP_SHORT (the successor of a piece that started and ended in one cycle, which the one
- * slot held) and TP_LATE (a request between lsm_interp_prepare and the step). Pieces planned ahead of a switch point
+ * slot held), TP_STALE (lead_cycles > 0 only) and TP_LATE (a request between lsm_interp_prepare and the step). Pieces planned ahead of a switch point
  * at lead_cycles > 0 leave the background that many cycles to finish.
  *
  * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
@@ -135,7 +135,8 @@ typedef struct lsm_interp_prep {
 } lsm_interp_prep;
 
 /* Why lsm_interp_step planned a piece itself (lsm_interp.tick_cause[], which add up to tick_plans). With
- * lsm_interp_prepare called before every step and nothing requested between the two, only TP_SHORT can occur. */
+ * lsm_interp_prepare called before every step and nothing requested between the two, only TP_SHORT (and TP_STALE
+ * at lead_cycles > 0) can occur. */
 typedef enum lsm_interp_tick_cause {
     LSM_INTERP_TP_NO_PREPARE = 0, /* lsm_interp_prepare is not in use: the step plans every piece */
     LSM_INTERP_TP_LATE = 1,       /* since the last lsm_interp_prepare the plan changed (an append, an override), a
@@ -143,7 +144,10 @@ typedef enum lsm_interp_tick_cause {
     LSM_INTERP_TP_SHORT = 2,      /* the successor of a piece that started and ended inside the same cycle: the one
                                      slot held that piece when the background ran */
     LSM_INTERP_TP_MISSED = 3,     /* none of these: a piece the background should have prepared (a defect) */
-    LSM_INTERP_TP_CAUSES = 4
+    LSM_INTERP_TP_STALE = 4,      /* lead_cycles > 0: the current piece is stale and nothing fits in its mode where the
+                                     background prepared its replacement ahead; the planner verified a piece only from
+                                     the last sample (its commitment point), so the step replaces it there at once */
+    LSM_INTERP_TP_CAUSES = 5
 } lsm_interp_tick_cause;
 
 typedef struct lsm_interp {

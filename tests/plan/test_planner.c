@@ -525,9 +525,9 @@ static void check_run(const prog *p, const run_res *r, const char *what, long c)
 
 /* Pieces planned inside the cycle, per program: each has a cause (interp.h, lsm_interp_tick_cause). Without
  * lsm_interp_prepare every piece is planned there (cause NO_PREPARE) and none is prepared. With it, called before every
- * step and nothing requested between the two, the only allowed cause is TP_SHORT (the successor of a piece that
- * started and ended inside one cycle: the one slot held that piece). */
-static void check_tick_plans(const run_res *r, int no_prepare, const char *what, long c)
+ * step and nothing requested between the two, the only allowed causes are TP_SHORT (the successor of a piece that
+ * started and ended inside one cycle: the one slot held that piece) and, with lead_cycles > 0, TP_STALE. */
+static void check_tick_plans(const run_res *r, int no_prepare, int lead, const char *what, long c)
 {
     uint32_t sum = 0;
     for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
@@ -541,7 +541,8 @@ static void check_tick_plans(const run_res *r, int no_prepare, const char *what,
                      what, c, g_seed, r->prepared, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_plans);
         return;
     }
-    if (r->tick_plans != r->tick_cause[LSM_INTERP_TP_SHORT])
+    const uint32_t stale = lead ? r->tick_cause[LSM_INTERP_TP_STALE] : 0u; /* allowed only with a lead */
+    if (r->tick_plans != r->tick_cause[LSM_INTERP_TP_SHORT] + stale)
         fail_msg("%s %ld (seed %lu): pieces planned in the cycle: no prepare %u, late %u, missed %u (and %u after a "
                  "piece shorter than a cycle)",
                  what, c, g_seed, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_cause[LSM_INTERP_TP_LATE],
@@ -584,7 +585,7 @@ static void scenario(int kind, const char *name, int mode)
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
-        check_tick_plans(&r, o.no_prepare, name, c);
+        check_tick_plans(&r, o.no_prepare, o.lead_cycles > 0u, name, c);
         for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
             cause[i] += r.tick_cause[i];
         if ((mode == 1 || mode == 4 || mode == 6) && r.held_cycles > 0) {
@@ -599,9 +600,10 @@ static void scenario(int kind, const char *name, int mode)
         free(r.q);
     }
     print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle "
-                  "(no prepare %ld, late %ld, short %ld, missed %ld)\n",
+                  "(no prepare %ld, late %ld, short %ld, missed %ld, stale with a lead %ld)\n",
                   name, ok, held, underruns, prepared, tick_plans, cause[LSM_INTERP_TP_NO_PREPARE],
-                  cause[LSM_INTERP_TP_LATE], cause[LSM_INTERP_TP_SHORT], cause[LSM_INTERP_TP_MISSED]);
+                  cause[LSM_INTERP_TP_LATE], cause[LSM_INTERP_TP_SHORT], cause[LSM_INTERP_TP_MISSED],
+                  cause[LSM_INTERP_TP_STALE]);
     assert_true(ok > 0);
 }
 

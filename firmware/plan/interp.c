@@ -35,6 +35,9 @@
 #define ARC_ANCHOR_RAD LSM_R(0.25) /* float arcs: re-anchor beyond this angle (the polynomials' range) */
 #define CLOTHOID_ANCHOR_STEPS 64u
 /* the piece being run, and the buffer of the piece planned ahead */
+/* A failed boundary's successor is prepared when the piece ends within this many cycles (the step crosses both in
+ * one cycle; a margin for the rounding of the phase times, and planning it one cycle early costs nothing) */
+#define SUCCESSOR_AHEAD_CYCLES LSM_R(2.0)
 #define HZ_NOT_POSTED 0xFFu /* hz_posted_phase: no phase of the current piece posted its horizon whole yet */
 #define CUR(ip) ((ip)->pcs[(ip)->cur])
 #define NXT(ip) ((ip)->pcs[(ip)->cur ^ 1u])
@@ -580,12 +583,26 @@ static void piece_constants(lsm_interp *ip)
 #endif
 }
 
+/* Will the step replace a stale current piece at switch point w (lsm_planner_piece_stale), planning it normally if
+ * nothing fits in w's mode? At a sample (the step replaces a stale piece at a sample where a = 0, or waits for the one
+ * prepared ahead) and at the end of a ramp (stop_at_boundary). */
+static bool stale_replaces_at(const lsm_interp *ip, const swpt *w)
+{
+    if (!ip->running || CUR(ip).hold || !lsm_planner_piece_stale(ip->pl))
+        return false;
+    /* (a sample lead_cycles ahead is not: the planner verified a piece from the last sample, its commitment point, and
+     * a normal piece planned further on may be its fallback stop; there the step replaces the piece at once) */
+    return (w->kind == LSM_INTERP_SW_SAMPLE && w->cycle == ip->cycles + 1u) ||
+           (w->kind == LSM_INTERP_SW_BOUNDARY && (w->phase == 8u || w->phase == 16u));
+}
+
 /* Plans the piece for switch point w into the slot. */
 static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
 {
     lsm_interp_prep *q = &ip->prep;
     q->ready = 0;
     q->failed = 0;
+    q->skip_phase = 0;
     q->kind = w->kind;
     q->mode = w->mode;
     q->phase = w->phase;
@@ -599,11 +616,13 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     lsm_status st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, (lsm_piece_mode)w->mode, &NXT(ip));
     const bool needed =
         w->kind == LSM_INTERP_SW_REST || (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES);
-    if (st != LSM_OK && w->mode == LSM_PIECE_HOLD && needed && w->v > R0) {
-        /* a piece is needed here (the current one ends) and no hold fits yet: go on normally (planned stops
-         * always exist), the hold takes effect at the next point where a = 0 */
+    /* A piece planned normally instead where nothing fits in w's mode: (a) a piece is needed here (the current one
+     * ends) and no hold fits yet: go on normally (planned stops always exist), the hold takes effect at the next point
+     * where a = 0; (b) the current piece is stale and the step must replace it here: what replacement_for would plan
+     * in the step, planned here instead (the slot keeps w's mode: the step asks for it). */
+    const bool hold_needed = w->mode == LSM_PIECE_HOLD && needed && w->v > R0;
+    if (st != LSM_OK && (hold_needed || (w->mode != LSM_PIECE_NORMAL && ip->bg && stale_replaces_at(ip, w))))
         st = lsm_planner_plan_piece(ip->pl, w->blk, w->off, w->v, LSM_PIECE_NORMAL, &NXT(ip));
-    }
     if (st == LSM_E_INTERNAL) { /* a fallback piece (counted by the planner): it is still a verified stop */
         ip->plan_errors++;
         st = LSM_OK;
@@ -622,8 +641,29 @@ static lsm_status plan_switch(lsm_interp *ip, const swpt *w)
     return st == LSM_OK ? LSM_E_EMPTY : st;
 }
 
+/* Is switch point w one the background found infeasible before preparing the piece needed after it (prep.skip_phase)? */
+static bool skipped(const lsm_interp *ip, const swpt *w)
+{
+    const lsm_interp_prep *q = &ip->prep;
+    return w->kind == LSM_INTERP_SW_BOUNDARY && q->skip_phase != 0u && q->skip_phase == w->phase &&
+           q->skip_mode == w->mode && q->kind == LSM_INTERP_SW_BOUNDARY && q->serial == ip->serial &&
+           q->gen == ip->pl->gen;
+}
+
+/* Why the step plans a piece itself (interp.h, lsm_interp_tick_cause); `successor`: the piece after one that ended. */
+static uint8_t tick_cause(const lsm_interp *ip, uint8_t hint)
+{
+    if (!ip->bg)
+        return LSM_INTERP_TP_NO_PREPARE;
+    if (ip->bg_cycles + 1u != ip->cycles || ip->bg_gen != ip->pl->gen || ip->bg_hold != ip->hold_req)
+        return LSM_INTERP_TP_LATE; /* (a piece is made stale only with a new generation) */
+    if (hint == LSM_INTERP_TP_SHORT)
+        return ip->took_cycle == ip->cycles ? LSM_INTERP_TP_SHORT : LSM_INTERP_TP_MISSED;
+    return hint;
+}
+
 /* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
-static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w)
+static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t hint)
 {
     lsm_interp_prep *q = &ip->prep;
     if (same_switch(ip, q, w)) {
@@ -632,19 +672,22 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w)
         if (q->failed)
             return NULL;
     }
+    if (skipped(ip, w))
+        return NULL; /* failed in the background, which prepared the piece after it */
     ip->tick_plans++;
+    ip->tick_cause[tick_cause(ip, hint)]++;
     return plan_switch(ip, w) == LSM_OK ? q : NULL;
 }
 
 /* piece_for, and where the geometry the current piece runs into has changed (piece_stale) and nothing fits in mode
  * w->mode, a piece planned normally instead: a new piece must start here (a verified one, or at worst a verified
  * stop). */
-static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w)
+static const lsm_interp_prep *replacement_for(lsm_interp *ip, swpt *w, uint8_t hint)
 {
-    const lsm_interp_prep *q = piece_for(ip, w);
+    const lsm_interp_prep *q = piece_for(ip, w, hint);
     if ((q == NULL || !(NXT(ip).T_s > R0)) && lsm_planner_piece_stale(ip->pl)) {
         w->mode = LSM_PIECE_NORMAL;
-        q = piece_for(ip, w);
+        q = piece_for(ip, w, hint);
     }
     return q;
 }
@@ -656,11 +699,25 @@ static bool prep_ready(const lsm_interp *ip, uint8_t kind)
     return q->ready && q->kind == kind && q->serial == ip->serial && q->gen == ip->pl->gen;
 }
 
+/* A replacement prepared (lead_cycles > 0: the cruise was too short for the sample lead_cycles ahead) for the start of
+ * the ramp that ends the current cruise, where the step stops for it (stop_at_boundary)? A stale piece waits for it as
+ * for a sample prepared ahead: it comes sooner than that sample would. */
+static bool ramp_start_ready(const lsm_interp *ip)
+{
+    const uint8_t p = ip->phase;
+    const lsm_interp_prep *q = &ip->prep; /* (prep_ready, written out: a third caller kept it from being inlined) */
+    if (!ip->bg || !(p == 0u || p == 8u) || !q->ready || q->kind != LSM_INTERP_SW_BOUNDARY)
+        return false;
+    return q->serial == ip->serial && q->gen == ip->pl->gen && q->phase == p + 1u &&
+           q->mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN);
+}
+
 /* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
 static void take(lsm_interp *ip, const lsm_interp_prep *q, lsm_real first, bool replace)
 {
     const uint32_t g = q->gen;
     ip->prep.ready = 0;
+    ip->took_cycle = ip->cycles;
     if (replace)
         ip->replans++;
     ip->gen = g;
@@ -683,8 +740,9 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
 {
     if (!(p == 1u || p == 8u || p == 9u || p == 16u))
         return false;
-    if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p)
-        return true;
+    if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p &&
+        ip->prep.mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN))
+        return true; /* (only a piece run_cycle will take: one for a hold since cancelled is not) */
     if ((p == 8u || p == 16u) && !CUR(ip).hold && lsm_planner_piece_stale(ip->pl))
         return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */
     if (ip->bg)
@@ -943,7 +1001,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
                 ahead(ip, ds > R0 ? PATH_DS(ip, ds) : R0, &w.blk, &w.off);
                 w.v = CUR(ip).st[ip->phase].v_mm_s;
             }
-            const lsm_interp_prep *q = replacement_for(ip, &w);
+            const lsm_interp_prep *q = replacement_for(ip, &w, LSM_INTERP_TP_MISSED);
             if (q != NULL && NXT(ip).T_s > R0) {
                 take(ip, q, left, true);
             } else {
@@ -970,7 +1028,8 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
         w.blk = ip->blk;
         w.off = ip->off_mm;
         w.v = ip->v_mm_s;
-        const lsm_interp_prep *q = piece_for(ip, &w); /* (serial is still the ended piece's: its successor) */
+        const lsm_interp_prep *q =
+            piece_for(ip, &w, LSM_INTERP_TP_SHORT); /* (serial is still the ended piece's: its successor) */
         if (q == NULL || !(NXT(ip).T_s > R0))
             return;
         take(ip, q, left, false);
@@ -1031,7 +1090,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             if (ip->v_mm_s == R0 && ip->hold_req) {
                 ip->state = LSM_INTERP_HELD; /* a hold at rest */
             } else if (next_switch(ip, &w)) {
-                const lsm_interp_prep *q = piece_for(ip, &w);
+                const lsm_interp_prep *q = piece_for(ip, &w, LSM_INTERP_TP_MISSED);
                 if (q != NULL && NXT(ip).T_s > R0)
                     take(ip, q, dt, false);
                 else if (!path_ahead(ip))
@@ -1048,7 +1107,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
         if (sample_ready && q->cycle == ip->cycles) {
             take(ip, q, dt, true);
         } else if (at_a_zero(ip) && !CUR(ip).hold &&
-                   ((lsm_planner_piece_stale(pl) && !(sample_ready && q->cycle > ip->cycles)) ||
+                   ((lsm_planner_piece_stale(pl) && !(sample_ready && q->cycle > ip->cycles) &&
+                     !ramp_start_ready(ip)) ||
                     (!ip->bg && (ip->hold_req || ip->gen != pl->gen)))) {
             /* (a stale piece waits for a replacement prepared for a sample still ahead in this cruise: planned
              * with the current plan, it is verified, and the rest of the cruise is not what changed) */
@@ -1060,7 +1120,9 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             w.blk = ip->blk;
             w.off = ip->off_mm;
             w.v = ip->v_mm_s;
-            q = replacement_for(ip, &w);
+            /* (a stale piece at lead_cycles > 0 whose replacement prepared ahead failed: TP_STALE) */
+            const bool stale_lead = ip->bg && ip->lead_cycles > 0u && lsm_planner_piece_stale(pl);
+            q = replacement_for(ip, &w, stale_lead ? LSM_INTERP_TP_STALE : LSM_INTERP_TP_MISSED);
             if (q != NULL)
                 take(ip, q, dt, true);
             else if (is_cruise(ip->phase) && w.mode == LSM_PIECE_REPLAN)
@@ -1078,17 +1140,55 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
     return (lsm_interp_state)ip->state;
 }
 
+/* Switch point w of the current piece (a boundary before its end) failed: if the piece's end comes within about a
+ * cycle, the step will cross both in one cycle, and needs the successor there. Writes it into w; false if not. */
+static bool successor_point(const lsm_interp *ip, swpt *w)
+{
+    if (w->kind != LSM_INTERP_SW_BOUNDARY || w->phase >= LSM_PIECE_PHASES || !ip->running || CUR(ip).stop ||
+        CUR(ip).hold)
+        return false;
+    lsm_real left = -ip->tau; /* time from the last sample to the piece's end */
+    for (uint8_t p = ip->phase; p < LSM_PIECE_PHASES; p++)
+        left += CUR(ip).ph[p].T_s;
+    if (!(left <= SUCCESSOR_AHEAD_CYCLES * ip->pl->cfg.cycle_s))
+        return false;
+    const uint8_t mode = w->mode == LSM_PIECE_HOLD ? LSM_PIECE_HOLD : LSM_PIECE_NORMAL; /* (as next_switch) */
+    boundary_point(ip, LSM_PIECE_PHASES, w);
+    w->mode = mode;
+    return true;
+}
+
+/* Switch point w failed (the slot says so): where the piece's end follows within about a cycle, its successor is
+ * planned now, in the same call (the step would otherwise plan it: it crosses both in one cycle), and the slot
+ * remembers w as failed (skip_phase). Returns LSM_OK if that successor is ready, else LSM_E_INFEASIBLE. */
+static lsm_status prepare_successor(lsm_interp *ip, swpt *w)
+{
+    const uint8_t ph = w->phase, mode = w->mode;
+    if (!successor_point(ip, w))
+        return LSM_E_INFEASIBLE;
+    ip->prepared++;
+    const lsm_status st = plan_switch(ip, w);
+    ip->prep.skip_phase = ph;
+    ip->prep.skip_mode = mode;
+    return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
+}
+
 lsm_status lsm_interp_prepare(lsm_interp *ip)
 {
     if (ip == NULL)
         return LSM_E_NULL;
     ip->bg = 1;
+    ip->bg_cycles = ip->cycles;
+    ip->bg_gen = ip->pl->gen;
+    ip->bg_hold = ip->hold_req;
     swpt w;
     if (!next_switch(ip, &w))
         return LSM_OK;
     const lsm_interp_prep *q = &ip->prep;
+    if (skipped(ip, &w) && !successor_point(ip, &w))
+        return LSM_OK;
     if (same_switch(ip, q, &w))
-        return q->ready ? LSM_OK : LSM_E_INFEASIBLE;
+        return q->ready ? LSM_OK : prepare_successor(ip, &w);
     /* a piece prepared for a cruise sample still ahead (lead_cycles) stays: the target moves on with every cycle */
     if (w.kind == LSM_INTERP_SW_SAMPLE && q->kind == LSM_INTERP_SW_SAMPLE && q->serial == ip->serial &&
         q->gen == ip->pl->gen && q->mode == w.mode && q->cycle > ip->cycles && (q->ready || q->failed))
@@ -1097,7 +1197,7 @@ lsm_status lsm_interp_prepare(lsm_interp *ip)
     const lsm_status st = plan_switch(ip, &w);
     if (st != LSM_OK && w.kind == LSM_INTERP_SW_SAMPLE && w.mode == LSM_PIECE_REPLAN && is_cruise(ip->phase))
         ip->gen = ip->pl->gen; /* in a cruise the current piece stays valid: accept the change */
-    return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
+    return st == LSM_OK ? LSM_OK : prepare_successor(ip, &w);
 }
 
 void lsm_interp_hold(lsm_interp *ip)

@@ -51,8 +51,18 @@
  * it was planned for; lsm_interp_step takes it when it reaches that point. Called between cycles (from the
  * background, or before each step in a synchronous loop), it leaves the control cycle with no planning: the cycle
  * only evaluates. A cycle that reaches a switch point where a piece is needed and none is prepared plans it itself
- * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans; callers that prepare see 0.
- * Pieces planned ahead of a switch point at lead_cycles > 0 leave the background that many cycles to finish.
+ * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans, by cause (tick_cause[],
+ * lsm_interp_tick_cause). The background prepares what the step will need, including where a first choice fails:
+ *   - a hold (or replacement) that fits nowhere at the last switch point before the piece's end, when that end comes
+ *     within the same cycle: the successor is planned in the same call (prep.skip_phase remembers the failed point);
+ *   - a stale piece (lsm_planner_piece_stale) that nothing fits in the hold or replan mode where the step must replace
+ *     it (a sample, a ramp's end): the piece planned normally, as the step would;
+ *   - a stale piece waits for its replacement prepared ahead, at a sample (lead_cycles) or at the start of the ramp
+ *     that ends its cruise (a cruise shorter than lead_cycles + 1 cycles), and the step stops at a boundary only for
+ *     a piece of the mode it asks for (a piece left from a hold since cancelled is not taken).
+ * What remains for the step: TP_SHORT (the successor of a piece that started and ended in one cycle, which the one
+ * slot held), TP_STALE (lead_cycles > 0 only) and TP_LATE (a request between lsm_interp_prepare and the step). Pieces planned ahead of a switch point
+ * at lead_cycles > 0 leave the background that many cycles to finish.
  *
  * Feed override 0 .. 200 %: decreases take effect beyond the distance the machine needs to slow down, increases
  * at once; both through the planner, so every change is a verified sin² ramp (jerk-limited). 0 % is a feed hold.
@@ -77,7 +87,7 @@
  * blocks and the prepared slot, and lsm_interp_prepare reads the step's cursor and pieces, with no hand-off of their
  * own: that is why a step may not preempt the background's calls on the same interpolator, and why the motion layer
  * moves the whole interpolator to the background rather than splitting it. A step that reaches a switch point with
- * no piece prepared plans it itself (tick_plans; 0 when lsm_interp_prepare runs before every step).
+ * no piece prepared plans it itself (tick_plans, tick_cause[]).
  *
  * Units: mm, s, rad.
  */
@@ -112,14 +122,33 @@ typedef struct lsm_interp_prep {
     uint32_t blk;    /* where it starts (block id, offset) and its speed there */
     lsm_real off_mm;
     lsm_real v_mm_s;
-    uint8_t kind;   /* lsm_interp_switch */
-    uint8_t phase;  /* SW_BOUNDARY */
-    uint8_t ready;  /* the second piece buffer holds the piece */
-    uint8_t failed; /* no piece fits at this switch point for this generation (do not try again) */
-    uint8_t mode;   /* lsm_piece_mode it was planned with */
-    uint8_t reserved[3];
+    uint8_t kind;       /* lsm_interp_switch */
+    uint8_t phase;      /* SW_BOUNDARY */
+    uint8_t ready;      /* the second piece buffer holds the piece */
+    uint8_t failed;     /* no piece fits at this switch point for this generation (do not try again) */
+    uint8_t mode;       /* lsm_piece_mode it was planned with */
+    uint8_t skip_phase; /* SW_BOUNDARY: boundary skip_phase (before `phase`) of the same piece failed in mode skip_mode
+                           for this generation, and the slot holds the piece needed after it (0: none) */
+    uint8_t skip_mode;
+    uint8_t reserved;
     uint32_t stale_seen; /* the planner's invalidation count when it was planned (lsm_planner_stale_count) */
 } lsm_interp_prep;
+
+/* Why lsm_interp_step planned a piece itself (lsm_interp.tick_cause[], which add up to tick_plans). With
+ * lsm_interp_prepare called before every step and nothing requested between the two, only TP_SHORT (and TP_STALE
+ * at lead_cycles > 0) can occur. */
+typedef enum lsm_interp_tick_cause {
+    LSM_INTERP_TP_NO_PREPARE = 0, /* lsm_interp_prepare is not in use: the step plans every piece */
+    LSM_INTERP_TP_LATE = 1,       /* since the last lsm_interp_prepare the plan changed (an append, an override), a
+                                     piece was invalidated, a hold or resume was requested, or a step ran without one */
+    LSM_INTERP_TP_SHORT = 2,      /* the successor of a piece that started and ended inside the same cycle: the one
+                                     slot held that piece when the background ran */
+    LSM_INTERP_TP_MISSED = 3,     /* none of these: a piece the background should have prepared (a defect) */
+    LSM_INTERP_TP_STALE = 4,      /* lead_cycles > 0: the current piece is stale and nothing fits in its mode where the
+                                     background prepared its replacement ahead; the planner verified a piece only from
+                                     the last sample (its commitment point), so the step replaces it there at once */
+    LSM_INTERP_TP_CAUSES = 5
+} lsm_interp_tick_cause;
 
 typedef struct lsm_interp {
     lsm_planner *pl;
@@ -177,8 +206,15 @@ typedef struct lsm_interp {
     uint8_t bg;              /* lsm_interp_prepare is in use: the cycle plans only what it must */
     uint8_t hz_posted_phase; /* the phase of the current piece whose horizon was posted whole (HZ_NOT_POSTED: none) */
     uint8_t reserved2[2];
-    uint32_t prepared;    /* pieces planned by lsm_interp_prepare */
-    lsm_interp_prep prep; /* the slot of lsm_interp_prepare */
+    uint32_t prepared;                         /* pieces planned by lsm_interp_prepare */
+    lsm_interp_prep prep;                      /* the slot of lsm_interp_prepare */
+    uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (lsm_interp_tick_cause) */
+    /* what the last lsm_interp_prepare saw, for TP_LATE: the step count, planner generation and hold request then */
+    uint64_t bg_cycles;
+    uint64_t took_cycle; /* the step count when a piece was last taken (TP_SHORT: in the current step) */
+    uint32_t bg_gen;
+    uint8_t bg_hold;
+    uint8_t reserved3[3];
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */
@@ -191,7 +227,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES]);
 
 /* Background work between cycles: plans the next piece the interpolator will need (see above). Returns LSM_OK (a
  * piece is ready, or nothing is needed), LSM_E_INFEASIBLE (none fits at the next switch point: the current plan
- * stays valid and is followed), LSM_E_NULL. At most one piece plan per call. Background. */
+ * stays valid and is followed), LSM_E_NULL. At most one piece plan per call, two where the first fails and the piece's
+ * end follows within the cycle (its successor: see above). Background. */
 lsm_status lsm_interp_prepare(lsm_interp *ip);
 
 /* Feed hold and resume. Resume while holding cancels the hold (a hold already decelerating completes first).

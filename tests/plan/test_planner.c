@@ -254,6 +254,7 @@ typedef struct run_res {
     long held_cycles;
     uint32_t fallbacks, underruns;
     uint32_t tick_plans, prepared;
+    uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
 } run_res;
 
 static double dist_geom(const lsm_geom *g, const double x[3])
@@ -407,6 +408,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     }
     r->fallbacks = pl.stats.plan_fallbacks;
     r->tick_plans = ip.tick_plans;
+    for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+        r->tick_cause[i] = ip.tick_cause[i];
     r->prepared = ip.prepared;
     if (!r->done && getenv("TEST_DUMP"))
         print_message("not done: next %d of %d fin %d state %d count %u free %u fit_n %u blk %u head %u tail %u "
@@ -520,6 +523,32 @@ static void check_run(const prog *p, const run_res *r, const char *what, long c)
         fail_msg("%s %ld (seed %lu): %u fallback pieces", what, c, g_seed, r->fallbacks);
 }
 
+/* Pieces planned inside the cycle, per program: each has a cause (interp.h, lsm_interp_tick_cause). Without
+ * lsm_interp_prepare every piece is planned there (cause NO_PREPARE) and none is prepared. With it, called before every
+ * step and nothing requested between the two, the only allowed causes are TP_SHORT (the successor of a piece that
+ * started and ended inside one cycle: the one slot held that piece) and, with lead_cycles > 0, TP_STALE. */
+static void check_tick_plans(const run_res *r, int no_prepare, int lead, const char *what, long c)
+{
+    uint32_t sum = 0;
+    for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+        sum += r->tick_cause[i];
+    if (sum != r->tick_plans)
+        fail_msg("%s %ld (seed %lu): %u pieces planned in the cycle, %u by cause", what, c, g_seed, r->tick_plans, sum);
+    if (no_prepare) {
+        if (r->prepared != 0 || r->tick_cause[LSM_INTERP_TP_NO_PREPARE] != r->tick_plans)
+            fail_msg("%s %ld (seed %lu): without lsm_interp_prepare %u pieces prepared, %u of %u planned in the "
+                     "cycle as such",
+                     what, c, g_seed, r->prepared, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_plans);
+        return;
+    }
+    const uint32_t stale = lead ? r->tick_cause[LSM_INTERP_TP_STALE] : 0u; /* allowed only with a lead */
+    if (r->tick_plans != r->tick_cause[LSM_INTERP_TP_SHORT] + stale)
+        fail_msg("%s %ld (seed %lu): pieces planned in the cycle: no prepare %u, late %u, missed %u (and %u after a "
+                 "piece shorter than a cycle)",
+                 what, c, g_seed, r->tick_cause[LSM_INTERP_TP_NO_PREPARE], r->tick_cause[LSM_INTERP_TP_LATE],
+                 r->tick_cause[LSM_INTERP_TP_MISSED], r->tick_cause[LSM_INTERP_TP_SHORT]);
+}
+
 static uint64_t rng(int salt)
 {
     return 0x9E3779B97F4A7C15ull ^ ((uint64_t)g_seed * 0x100000001B3ull) ^ (uint64_t)salt;
@@ -529,7 +558,7 @@ static void scenario(int kind, const char *name, int mode)
 {
     uint64_t rs = rng(kind * 131 + mode);
     static prog p;
-    long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0;
+    long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0, cause[LSM_INTERP_TP_CAUSES] = {0};
     for (long c = 0; c < g_count; c++) {
         gen(&p, &rs, kind);
         if (p.n == 0)
@@ -556,6 +585,9 @@ static void scenario(int kind, const char *name, int mode)
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
+        check_tick_plans(&r, o.no_prepare, o.lead_cycles > 0u, name, c);
+        for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
+            cause[i] += r.tick_cause[i];
         if ((mode == 1 || mode == 4 || mode == 6) && r.held_cycles > 0) {
             held++;
             if (r.held_motion != 0)
@@ -567,13 +599,11 @@ static void scenario(int kind, const char *name, int mode)
         ok++;
         free(r.q);
     }
-    print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle\n",
-                  name, ok, held, underruns, prepared, tick_plans);
-    /* with lsm_interp_prepare before every cycle, the cycle plans only pieces that follow one shorter than a cycle */
-    if ((mode < 4 || mode >= 6) && tick_plans * 100 > prepared)
-        fail_msg("%s: %ld of %ld pieces planned inside the cycle", name, tick_plans, prepared);
-    if ((mode == 4 || mode == 5) && prepared != 0)
-        fail_msg("%s: %ld pieces prepared without lsm_interp_prepare", name, prepared);
+    print_message("%s: %ld programs, %ld held, %ld underrun stops, %ld pieces prepared, %ld planned in the cycle "
+                  "(no prepare %ld, late %ld, short %ld, missed %ld, stale with a lead %ld)\n",
+                  name, ok, held, underruns, prepared, tick_plans, cause[LSM_INTERP_TP_NO_PREPARE],
+                  cause[LSM_INTERP_TP_LATE], cause[LSM_INTERP_TP_SHORT], cause[LSM_INTERP_TP_MISSED],
+                  cause[LSM_INTERP_TP_STALE]);
     assert_true(ok > 0);
 }
 
@@ -708,6 +738,45 @@ static void test_resume_after_underrun(void **state)
     print_message("resume after underrun: stopped at cycle %ld, %ld cycles in all\n", idle_at, n);
 }
 
+/* The cause of a piece planned in the cycle: blocks appended after lsm_interp_prepare ran (at rest, nothing to
+ * prepare then) make the step plan the first piece itself, counted as TP_LATE; with a prepare before every later step,
+ * nothing more is planned in the cycle, and the program runs to its end. */
+static void test_tick_cause_late(void **state)
+{
+    (void)state;
+    lsm_planner_config cfg;
+    config(&cfg);
+    lsm_pblock store[32];
+    lsm_planner pl;
+    lsm_real z[LSM_MAX_AXES] = {0};
+    assert_int_equal(lsm_planner_init(&pl, &cfg, store, 32, z), LSM_OK);
+    lsm_interp ip;
+    assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
+    assert_int_equal(lsm_interp_prepare(&ip), LSM_OK); /* nothing to do yet */
+    const double s = SPAN / 150.0;
+    const double pts[4][2] = {{20 * s, 0}, {30 * s, 8 * s}, {45 * s, 8 * s}, {60 * s, -5 * s}};
+    lsm_planner_move mv = {(lsm_real)(60 * s + 10), (lsm_real)0.02, 0, 0};
+    for (int k = 0; k < 4; k++) {
+        const lsm_real e[LSM_MAX_AXES] = {(lsm_real)pts[k][0], (lsm_real)pts[k][1], 0, 0, 0, 0};
+        assert_int_equal(lsm_planner_append_line(&pl, e, &mv), LSM_OK);
+    }
+    assert_int_equal(lsm_planner_finish(&pl), LSM_OK);
+    lsm_real pos[LSM_MAX_AXES];
+    lsm_interp_state st = lsm_interp_step(&ip, pos); /* no prepare since the appends */
+    assert_int_equal(st, LSM_INTERP_RUN);
+    assert_int_equal(ip.tick_plans, 1u);
+    assert_int_equal(ip.tick_cause[LSM_INTERP_TP_LATE], 1u);
+    for (long k = 0; k < 200000 && st != LSM_INTERP_DONE; k++) {
+        (void)lsm_interp_prepare(&ip);
+        st = lsm_interp_step(&ip, pos);
+    }
+    assert_int_equal(st, LSM_INTERP_DONE);
+    assert_true(pos[0] == (lsm_real)pts[3][0] && pos[1] == (lsm_real)pts[3][1]);
+    assert_int_equal(ip.tick_plans, 1u);
+    assert_int_equal(ip.tick_cause[LSM_INTERP_TP_MISSED] + ip.tick_cause[LSM_INTERP_TP_NO_PREPARE], 0u);
+    assert_true(ip.prepared > 0u);
+}
+
 /* ---------------------------------------------------------------------------------------------------------- */
 /* bad input                                                                                                   */
 
@@ -806,12 +875,13 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_block_size),  cmocka_unit_test(test_bad_blocks),
-        cmocka_unit_test(test_lines),       cmocka_unit_test(test_arcs),
-        cmocka_unit_test(test_mixed),       cmocka_unit_test(test_dense),
-        cmocka_unit_test(test_hold_resume), cmocka_unit_test(test_override),
-        cmocka_unit_test(test_underrun),    cmocka_unit_test(test_resume_after_underrun),
-        cmocka_unit_test(test_no_prepare),  cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_block_size),      cmocka_unit_test(test_bad_blocks),
+        cmocka_unit_test(test_lines),           cmocka_unit_test(test_arcs),
+        cmocka_unit_test(test_mixed),           cmocka_unit_test(test_dense),
+        cmocka_unit_test(test_hold_resume),     cmocka_unit_test(test_override),
+        cmocka_unit_test(test_underrun),        cmocka_unit_test(test_resume_after_underrun),
+        cmocka_unit_test(test_no_prepare),      cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_tick_cause_late),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

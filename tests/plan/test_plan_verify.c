@@ -79,7 +79,8 @@ static void append_one(lsm_planner *pl, uint64_t *st, double p[3])
     const lsm_planner_move mv = {(lsm_real)test_logu(st, 5, 300), (lsm_real)test_logu(st, 2e-3, 0.1), 0, 0};
     const double u = test_urand(st);
     if (u < 0.3) {
-        (void)test_append_random_arc(pl, st, p, 0.1, 30, 4.0, &mv); /* (an arc that does not fit is refused: the next item is tried) */
+        (void)test_append_random_arc(pl, st, p, 0.1, 30, 4.0,
+                                     &mv); /* (an arc that does not fit is refused: the next item is tried) */
         return;
     }
     double h = test_uni(st, 0, 6.283185307179586);

@@ -780,8 +780,8 @@ static void test_tick_cause_late(void **state)
 /* A hold requested in the last cruise of a piece that ends within the next cycle or two, where no hold fits at the
  * sample: lsm_interp_prepare plans the successor the step will need at the piece's end in the same call (the sample
  * failed; the step crosses the end in its cycle). Found by the path soak: seed 21833, program 2 of the hold scenario,
- * float build (which planned that successor in the cycle, TP_MISSED); the double build runs the same programs.
- * check_tick_plans fails on any TP_MISSED. */
+ * float build; without the fix both builds planned that successor in the cycle (TP_MISSED), which check_tick_plans
+ * fails on. */
 static void test_hold_sample_successor(void **state)
 {
     (void)state;

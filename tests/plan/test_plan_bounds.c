@@ -29,6 +29,7 @@
 #include "lsm_test_rng.h"
 #include "planner.h"
 #include "planner_int.h"
+#include "lsm_test_path.h"
 
 /* The check holds within this relative slack of the limits (the rounding of the test's own evaluation). */
 #if LSM_REAL_IS_FLOAT
@@ -220,27 +221,8 @@ static void machine(uint64_t *st, lsm_planner_config *cfg)
 static lsm_status append_one(lsm_planner *pl, uint64_t *st, double p[3])
 {
     lsm_planner_move mv = {(lsm_real)test_logu(st, 5, 500), (lsm_real)test_logu(st, 1e-3, 0.2), 0, 0};
-    if (test_urand(st) < 0.35) {
-        static const lsm_geom_plane planes[3] = {LSM_GEOM_PLANE_XY, LSM_GEOM_PLANE_ZX, LSM_GEOM_PLANE_YZ};
-        static const int axes[3][3] = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}; /* e1, e2, n of each plane */
-        const int pi = (int)(test_urand(st) * 3) % 3;
-        const double r = test_logu(st, 0.05, 30), ph = test_uni(st, 0, 6.283185307179586);
-        const double sw = test_uni(st, 0.2, 5.5), dir = test_urand(st) < 0.5 ? 1.0 : -1.0;
-        double c[3] = {p[0], p[1], p[2]}, e[3] = {p[0], p[1], p[2]};
-        const int *ax = axes[pi];
-        c[ax[0]] = p[ax[0]] - r * cos(ph);
-        c[ax[1]] = p[ax[1]] - r * sin(ph);
-        e[ax[0]] = c[ax[0]] + r * cos(ph + dir * sw);
-        e[ax[1]] = c[ax[1]] + r * sin(ph + dir * sw);
-        if (test_urand(st) < 0.2)
-            e[ax[2]] += test_uni(st, -2, 2); /* a helix */
-        const lsm_real el[3] = {(lsm_real)e[0], (lsm_real)e[1], (lsm_real)e[2]};
-        const lsm_real cl[3] = {(lsm_real)c[0], (lsm_real)c[1], (lsm_real)c[2]};
-        const lsm_status s = lsm_planner_append_arc(pl, el, cl, planes[pi], (int)dir, 0, &mv);
-        if (s == LSM_OK)
-            memcpy(p, e, sizeof e);
-        return s;
-    }
+    if (test_urand(st) < 0.35)
+        return test_append_random_arc(pl, st, p, 0.05, 30, 5.5, &mv);
     const double len = test_logu(st, 0.05, 20);
     double d[3] = {test_uni(st, -1, 1), test_uni(st, -1, 1), test_uni(st, -1, 1)};
     if (test_urand(st) < 0.5)

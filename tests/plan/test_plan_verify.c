@@ -31,6 +31,7 @@
 #include "lsm_test_rng.h"
 #include "planner.h"
 #include "planner_int.h"
+#include "lsm_test_path.h"
 
 #define CAP 96
 #define RAMPS_PER_PROGRAM 160
@@ -60,29 +61,6 @@ static void machine(uint64_t *st, lsm_planner_config *cfg)
     }
 }
 
-static lsm_status append_arc(lsm_planner *pl, uint64_t *st, double p[3], const lsm_planner_move *mv)
-{
-    static const lsm_geom_plane planes[3] = {LSM_GEOM_PLANE_XY, LSM_GEOM_PLANE_ZX, LSM_GEOM_PLANE_YZ};
-    static const int axes[3][3] = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}; /* e1, e2, n of each plane */
-    const int pi = (int)(test_urand(st) * 3) % 3;
-    const double r = test_logu(st, 0.1, 30), ph = test_uni(st, 0, 6.283185307179586);
-    const double sw = test_uni(st, 0.2, 4.0), dir = test_urand(st) < 0.5 ? 1.0 : -1.0;
-    double c[3] = {p[0], p[1], p[2]}, e[3] = {p[0], p[1], p[2]};
-    const int *ax = axes[pi];
-    c[ax[0]] = p[ax[0]] - r * cos(ph);
-    c[ax[1]] = p[ax[1]] - r * sin(ph);
-    e[ax[0]] = c[ax[0]] + r * cos(ph + dir * sw);
-    e[ax[1]] = c[ax[1]] + r * sin(ph + dir * sw);
-    if (test_urand(st) < 0.2)
-        e[ax[2]] += test_uni(st, -2, 2); /* a helix */
-    const lsm_real el[3] = {(lsm_real)e[0], (lsm_real)e[1], (lsm_real)e[2]};
-    const lsm_real cl[3] = {(lsm_real)c[0], (lsm_real)c[1], (lsm_real)c[2]};
-    const lsm_status s = lsm_planner_append_arc(pl, el, cl, planes[pi], (int)dir, 0, mv);
-    if (s == LSM_OK)
-        memcpy(p, e, sizeof e);
-    return s;
-}
-
 static lsm_status append_line(lsm_planner *pl, double p[3], const double d[3], double len, const lsm_planner_move *mv)
 {
     lsm_real e[LSM_MAX_AXES] = {0};
@@ -101,7 +79,8 @@ static void append_one(lsm_planner *pl, uint64_t *st, double p[3])
     const lsm_planner_move mv = {(lsm_real)test_logu(st, 5, 300), (lsm_real)test_logu(st, 2e-3, 0.1), 0, 0};
     const double u = test_urand(st);
     if (u < 0.3) {
-        (void)append_arc(pl, st, p, &mv); /* (an arc that does not fit is refused: the next item is tried) */
+        (void)test_append_random_arc(pl, st, p, 0.1, 30, 4.0,
+                                     &mv); /* (an arc that does not fit is refused: the next item is tried) */
         return;
     }
     double h = test_uni(st, 0, 6.283185307179586);

@@ -1,0 +1,39 @@
+/*
+ * lsm_test_path.h: random path items for the planner's randomized tests. Header-only; needs lsm_test_rng.h and
+ * planner.h included before it.
+ *
+ * test_append_random_arc: one arc from p in a random plane (XY, ZX or YZ), radius log-uniform in [r_lo, r_hi] mm,
+ * sweep uniform in [0.2, sw_hi] rad either way, one in five a helix (up to +-2 mm along the plane's normal). On
+ * LSM_OK, p becomes the arc's end (as the planner stored it, rounded to lsm_real). A refused arc leaves p as it was.
+ */
+#ifndef LSM_TEST_PATH_H
+#define LSM_TEST_PATH_H
+
+#include <math.h>
+#include <string.h>
+
+static inline lsm_status test_append_random_arc(lsm_planner *pl, uint64_t *st, double p[3], double r_lo, double r_hi,
+                                                double sw_hi, const lsm_planner_move *mv)
+{
+    static const lsm_geom_plane planes[3] = {LSM_GEOM_PLANE_XY, LSM_GEOM_PLANE_ZX, LSM_GEOM_PLANE_YZ};
+    static const int axes[3][3] = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}}; /* e1, e2, n of each plane */
+    const int pi = (int)(test_urand(st) * 3) % 3;
+    const double r = test_logu(st, r_lo, r_hi), ph = test_uni(st, 0, 6.283185307179586);
+    const double sw = test_uni(st, 0.2, sw_hi), dir = test_urand(st) < 0.5 ? 1.0 : -1.0;
+    double c[3] = {p[0], p[1], p[2]}, e[3] = {p[0], p[1], p[2]};
+    const int *ax = axes[pi];
+    c[ax[0]] = p[ax[0]] - r * cos(ph);
+    c[ax[1]] = p[ax[1]] - r * sin(ph);
+    e[ax[0]] = c[ax[0]] + r * cos(ph + dir * sw);
+    e[ax[1]] = c[ax[1]] + r * sin(ph + dir * sw);
+    if (test_urand(st) < 0.2)
+        e[ax[2]] += test_uni(st, -2, 2); /* a helix */
+    const lsm_real el[3] = {(lsm_real)e[0], (lsm_real)e[1], (lsm_real)e[2]};
+    const lsm_real cl[3] = {(lsm_real)c[0], (lsm_real)c[1], (lsm_real)c[2]};
+    const lsm_status s = lsm_planner_append_arc(pl, el, cl, planes[pi], (int)dir, 0, mv);
+    if (s == LSM_OK)
+        memcpy(p, e, sizeof e);
+    return s;
+}
+
+#endif

@@ -1140,12 +1140,14 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
     return (lsm_interp_state)ip->state;
 }
 
-/* Switch point w of the current piece (a boundary before its end) failed: if the piece's end comes within about a
- * cycle, the step will cross both in one cycle, and needs the successor there. Writes it into w; false if not. */
+/* Switch point w of the current piece (a boundary before its end, or a sample in its last cruise) failed: if the
+ * piece's end comes within about a cycle, the step will cross both in one cycle, and needs the successor there.
+ * Writes it into w; false if not. (Not for a stale piece's sample: the step tries that sample itself.) */
 static bool successor_point(const lsm_interp *ip, swpt *w)
 {
-    if (w->kind != LSM_INTERP_SW_BOUNDARY || w->phase >= LSM_PIECE_PHASES || !ip->running || CUR(ip).stop ||
-        CUR(ip).hold)
+    const bool boundary = w->kind == LSM_INTERP_SW_BOUNDARY && w->phase < LSM_PIECE_PHASES;
+    const bool sample = w->kind == LSM_INTERP_SW_SAMPLE && !lsm_planner_piece_stale(ip->pl);
+    if (!(boundary || sample) || !ip->running || CUR(ip).stop || CUR(ip).hold)
         return false;
     lsm_real left = -ip->tau; /* time from the last sample to the piece's end */
     for (uint8_t p = ip->phase; p < LSM_PIECE_PHASES; p++)

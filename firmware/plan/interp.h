@@ -53,8 +53,9 @@
  * only evaluates. A cycle that reaches a switch point where a piece is needed and none is prepared plans it itself
  * (as a cycle without lsm_interp_prepare always does) and counts it in tick_plans, by cause (tick_cause[],
  * lsm_interp_tick_cause). The background prepares what the step will need, including where a first choice fails:
- *   - a hold (or replacement) that fits nowhere at the last switch point before the piece's end, when that end comes
- *     within the same cycle: the successor is planned in the same call (prep.skip_phase remembers the failed point);
+ *   - a hold (or replacement) that fits nowhere at the last switch point before the piece's end (a boundary, or a
+ *     sample of its last cruise), when that end comes within the same cycle: the successor is planned in the same
+ *     call (prep.skip_phase remembers a failed boundary; a failed sample is tried again at the next sample);
  *   - a stale piece (lsm_planner_piece_stale) that nothing fits in the hold or replan mode where the step must replace
  *     it (a sample, a ramp's end): the piece planned normally, as the step would;
  *   - a stale piece waits for its replacement prepared ahead, at a sample (lead_cycles) or at the start of the ramp

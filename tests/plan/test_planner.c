@@ -777,6 +777,23 @@ static void test_tick_cause_late(void **state)
     assert_true(ip.prepared > 0u);
 }
 
+/* A hold requested in the last cruise of a piece that ends within the next cycle or two, where no hold fits at the
+ * sample: lsm_interp_prepare plans the successor the step will need at the piece's end in the same call (the sample
+ * failed; the step crosses the end in its cycle). Found by the path soak: seed 21833, program 2 of the hold scenario,
+ * float build; without the fix both builds planned that successor in the cycle (TP_MISSED), which check_tick_plans
+ * fails on. */
+static void test_hold_sample_successor(void **state)
+{
+    (void)state;
+    const unsigned long seed = g_seed;
+    const long count = g_count;
+    g_seed = 21833;
+    g_count = 3;
+    scenario(2, "hold (seed 21833)", 1);
+    g_seed = seed;
+    g_count = count;
+}
+
 /* ---------------------------------------------------------------------------------------------------------- */
 /* bad input                                                                                                   */
 
@@ -881,7 +898,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_hold_resume),     cmocka_unit_test(test_override),
         cmocka_unit_test(test_underrun),        cmocka_unit_test(test_resume_after_underrun),
         cmocka_unit_test(test_no_prepare),      cmocka_unit_test(test_lead_cycles),
-        cmocka_unit_test(test_tick_cause_late),
+        cmocka_unit_test(test_tick_cause_late), cmocka_unit_test(test_hold_sample_successor),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -476,8 +476,9 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
     }
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
-    if (f >= lsm_max2(near0, far0)) {
-        /* an increase at once, if the machine can go on with it (else as a decrease, beyond a switch) */
+    if (f >= ovr_of(pl, cur)) {
+        /* an increase (no block from the cursor on has a higher factor: near >= far) at once, if the machine can go
+         * on with it (else as a decrease, beyond a switch) */
         ovr_apply(pl, f, f, cur);
         if (ovr_commitment_ok(pl))
             return LSM_OK;

@@ -11,9 +11,10 @@
 #define W_STEP LSM_R(0.98)
 /* Tests of a node's W at most: the cap, the guesses with their closing tests and the steps below, the bisection. */
 #define W_TESTS (W_BISECT + W_DESCENT + 2)
-/* A lowered override: the stopping distance from the current speed is estimated with OVR_LIMIT_SHARE of the
- * block's limits at rest (a conservative ramp), scaled by OVR_NEED_SCALE, plus OVR_NEED_CYCLES cycles of travel;
- * the switch moves further out (doubling) at most OVR_TRIES times, then to the blocks appended later. */
+/* A lowered override (or a raised one the commitment does not allow at once): the stopping distance from the current
+ * speed is estimated with OVR_LIMIT_SHARE of the block's limits at rest (a conservative ramp), scaled by
+ * OVR_NEED_SCALE, plus OVR_NEED_CYCLES cycles of travel; the switch moves further out (doubling) at most OVR_TRIES
+ * times, then to the blocks appended later. */
 #define OVR_LIMIT_SHARE LSM_R(0.5)
 #define OVR_UNBOUNDED_A LSM_R(1e12)
 #define OVR_UNBOUNDED_J LSM_R(1e15)
@@ -385,6 +386,79 @@ void lsm_planner_update(lsm_planner *pl)
     lsm_pl_backward_pass(pl);
 }
 
+/* Sets the override state and plans with it. */
+static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far, uint32_t sw)
+{
+    pl->ovr_near = near;
+    pl->ovr_far = far;
+    pl->ovr_switch = sw;
+    pl->full_pass = 1;
+    pl->gen++;
+    lsm_pl_backward_pass(pl);
+}
+
+/* Does the plan just made keep the interpolator going (planner.h, "Commitment")? Its current piece still ends where it
+ * can go on, or a verified piece starts at its horizon (then the current piece is stale: it is replaced there). */
+static bool ovr_commitment_ok(lsm_planner *pl)
+{
+    if (lsm_pl_commitment_kept(pl))
+        return true;
+    if (!lsm_pl_horizon_feasible(pl, true))
+        return false;
+    lsm_pl_mark_stale(pl);
+    return true;
+}
+
+/* The stopping-scale distance from v_now at block cur (a conservative ramp with OVR_LIMIT_SHARE of its limits). */
+static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
+{
+    coef c;
+    coef_get(blk(pl, cur), &c);
+    ramp r;
+    const lsm_real a = c.aa > R0 ? OVR_LIMIT_SHARE / c.aa : OVR_UNBOUNDED_A;
+    const lsm_real j = c.aj > R0 ? OVR_LIMIT_SHARE / c.aj : OVR_UNBOUNDED_J;
+    const lsm_real s = c.as > R0 ? OVR_LIMIT_SHARE / c.as : OVR_UNBOUNDED_S;
+    if (v_now > R0 && lsm_pl_ramp_plan(&r, pl->cfg.cycle_s, v_now, R0, a, j, s))
+        return OVR_NEED_SCALE * r.dist + OVR_NEED_CYCLES * v_now * pl->cfg.cycle_s;
+    return R0;
+}
+
+/* The new factor f from a switch block on, beyond the stopping-scale distance from v_now (further out until a verified
+ * piece starts at the interpolator's commitment point), the factor in force at the cursor (`keep`) before it: nothing
+ * the machine is committed to changes. A factor raised where the piece ends may lower W there too (feasibility is not
+ * monotone in the caps: node_w), so the blocks before the switch keep the factor they had, not the larger one (a
+ * decrease from 95.6 % to 55.8 % raised them to 100 %, the current piece's end speed was no longer one from which the
+ * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
+ * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
+ * cursor: blocks beyond it back at `keep`), the previous state stays. */
+static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
+{
+    const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
+    const uint32_t sw0 = pl->ovr_switch;
+    const lsm_real keep = ovr_of(pl, cur);
+    lsm_real need = ovr_need(pl, cur, v_now);
+    for (int tries = 0; tries < OVR_TRIES; tries++) {
+        uint32_t id = cur;
+        lsm_real d = R0;
+        while (id != pl->tail && d <= need) {
+            d += blk(pl, id)->g.len;
+            id++;
+        }
+        if (id == pl->tail)
+            break;
+        ovr_apply(pl, keep, f, id);
+        if (lsm_pl_horizon_feasible(pl, false)) {
+            if (!lsm_pl_commitment_kept(pl))
+                lsm_pl_mark_stale(pl); /* (a verified piece from the horizon: just checked) */
+            return;
+        }
+        need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
+    }
+    ovr_apply(pl, keep, f, pl->tail);
+    if (!ovr_commitment_ok(pl))
+        ovr_apply(pl, near0, far0, sw0); /* the plan the machine runs on, as it was */
+}
+
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
 {
     if (pl == NULL)
@@ -396,48 +470,22 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
         return LSM_E_PL_OVERRIDE;
     if (id_lt(cur, pl->head) || !id_lt(cur, pl->tail))
         cur = pl->head;
-    const lsm_real hi = lsm_max2(pl->ovr_near, pl->ovr_far);
-    if (f >= hi || pl->tail == pl->head) {
-        pl->ovr_near = pl->ovr_far = f;
-        pl->ovr_switch = cur;
-    } else {
-        /* blocks within twice the stopping-scale distance keep the larger factor; the new one applies beyond */
-        pl->ovr_near = hi;
-        pl->ovr_far = f;
-        coef c;
-        coef_get(blk(pl, cur), &c);
-        ramp r;
-        lsm_real need = R0;
-        const lsm_real a = c.aa > R0 ? OVR_LIMIT_SHARE / c.aa : OVR_UNBOUNDED_A;
-        const lsm_real j = c.aj > R0 ? OVR_LIMIT_SHARE / c.aj : OVR_UNBOUNDED_J;
-        const lsm_real s = c.as > R0 ? OVR_LIMIT_SHARE / c.as : OVR_UNBOUNDED_S;
-        if (v_now > R0 && lsm_pl_ramp_plan(&r, pl->cfg.cycle_s, v_now, R0, a, j, s))
-            need = OVR_NEED_SCALE * r.dist + OVR_NEED_CYCLES * v_now * pl->cfg.cycle_s;
-        /* the switch must leave a verified piece from the interpolator's commitment point (catching up with
-         * the lower caps): further out until it does; at worst only blocks appended later get the new factor */
-        for (int tries = 0;; tries++) {
-            uint32_t id = cur;
-            lsm_real d = R0;
-            while (id != pl->tail && d <= need) {
-                d += blk(pl, id)->g.len;
-                id++;
-            }
-            if (tries >= OVR_TRIES)
-                id = pl->tail;
-            pl->ovr_switch = id;
-            pl->full_pass = 1;
-            pl->gen++;
-            lsm_pl_backward_pass(pl);
-            if (id == pl->tail || lsm_pl_horizon_feasible(pl, false))
-                break;
-            need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
-        }
-        if (!lsm_pl_commitment_kept(pl))
-            lsm_pl_mark_stale(pl); /* (the loop verified a piece from the horizon) */
+    if (pl->tail == pl->head) {
+        ovr_apply(pl, f, f, cur);
         return LSM_OK;
     }
-    pl->full_pass = 1;
-    pl->gen++;
-    lsm_pl_backward_pass(pl);
+    const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
+    const uint32_t sw0 = pl->ovr_switch;
+    if (f >= ovr_of(pl, cur)) {
+        /* an increase (no block from the cursor on has a higher factor: near >= far) at once, if the machine can go
+         * on with it (else as a decrease, beyond a switch) */
+        ovr_apply(pl, f, f, cur);
+        if (ovr_commitment_ok(pl))
+            return LSM_OK;
+        pl->ovr_near = near0;
+        pl->ovr_far = far0;
+        pl->ovr_switch = sw0;
+    }
+    ovr_switch_search(pl, f, cur, v_now);
     return LSM_OK;
 }

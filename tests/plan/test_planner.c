@@ -91,6 +91,8 @@ static void clampw(double *x)
     }
 }
 
+static void prog_paths(prog *p);
+
 /* kind: 0 lines, 1 arcs, 2 mixed (with exact stops), 3 dense polylines */
 static void gen(prog *p, uint64_t *rs, int kind)
 {
@@ -179,7 +181,12 @@ static void gen(prog *p, uint64_t *rs, int kind)
         }
     }
     memcpy(p->end, pos, sizeof p->end);
-    /* programmed path elements */
+    prog_paths(p);
+}
+
+/* The programmed path elements of p's commands (for the deviation). */
+static void prog_paths(prog *p)
+{
     double at[LSM_MAX_AXES] = {0};
     for (int k = 0; k < p->n; k++) {
         const cmd *c = &p->c[k];
@@ -645,6 +652,149 @@ static void test_no_prepare(void **state)
     scenario(2, "override (no prepare)", 5);
 }
 
+/* Regression (path soak, double build, seed 22514, "override (no prepare)" case 6): an override change raised the
+ * factor of the blocks ahead (a decrease from 95.6 % to 55.8 % set the blocks before its switch to 100 %, the larger
+ * factor; an increase to 100 % likewise), and with the higher caps the W of the node where the current piece ends fell
+ * below the piece's end speed (W is not monotone in the caps: whole-cycle ramps): from there no piece was found at
+ * all, and the machine stood still in RUN at 6.5 mm/s from cycle 438 on. Every override change must leave a verified
+ * piece where the machine is committed (planner.h, "Commitment"). The program and schedule of that case, with every
+ * piece planned in the cycle; then the increase alone. */
+static const cmd k_freeze_prog[] = {
+    {0,
+     {-0x1.c6e3f75c6befbp-4, -0x1.08ed961af5479p-1, 0x0p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.6dd0813fb0b4cp+2,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.44c254a78e5c1p+2, -0x1.201be466e2ce1p+2, 0x0p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.b2a768bf6da02p+6,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.1a8cb0c2b1567p+2, -0x1.7f77d8772dcc2p+2, -0x1.c01e2b0c1ed73p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.7613bf371807cp+6,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.1a8cb0c2b1567p+2, -0x1.907b3a62afa9bp+2, -0x1.c01e2b0c1ed73p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.d75897be2b5b6p+3,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.a78c3106f642cp+1, -0x1.907b3a62afa9bp+2, -0x1.c01e2b0c1ed73p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.fa7f17a7193a3p+2,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {1,
+     {0x1.4aff22bc86db8p-1, -0x1.00f6f0c6eb0fcp+0, -0x1.c01e2b0c1ed73p+0},
+     {0x1.9ed7763e4b0dap+0, -0x1.e7e5709b75f77p+1, -0x1.c01e2b0c1ed73p+0},
+     17,
+     -1,
+     0x1.4a83e176268dfp+7,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.4aff22bc86db8p-1, -0x1.00f6f0c6eb0fcp+0, 0x1.4daf45f1ca9c1p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.cb17456e15c32p+5,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {0x1.4aff22bc86db8p-1, 0x1.80d023161059ap+0, 0x1.4daf45f1ca9c1p+0},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.b33532b0366fap+7,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {-0x1.cc1b4ee6bf82p-2, 0x1.bf220e88153a7p+1, 0x1.e90a503fe43d8p+1},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.daca008db1b1ep+6,
+     0x1.8b20817cb1c0ep-6,
+     0},
+    {0,
+     {-0x1.0cc76c4b72e5ep+3, -0x1.8d4eca16b056p+2, 0x1.4d0abf822f23ep+2},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.1f1773c4d42b4p+5,
+     0x1.69d44d924faa5p-6,
+     0},
+    {0,
+     {-0x1.7783714945d1cp+4, 0x1.27a76ee48218p+1, 0x1.dc41ce35a3d28p+4},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.a517a95329505p+3,
+     0x1.69d44d924faa5p-6,
+     0},
+    {0,
+     {-0x1.b10fd71043ccdp+4, 0x1.e5bcc12d3aa11p+4, 0x1.dc41ce35a3d28p+4},
+     {0x0p+0, 0x0p+0, 0x0p+0},
+     0,
+     0,
+     0x1.b8faaf34e68f9p+3,
+     0x1.69d44d924faa5p-6,
+     0},
+};
+
+static void run_freeze_case(const long *at, const double *val, int n_ovr, const char *what)
+{
+    static prog p;
+    memset(&p, 0, sizeof p);
+    p.n = (int)(sizeof k_freeze_prog / sizeof k_freeze_prog[0]);
+    memcpy(p.c, k_freeze_prog, sizeof k_freeze_prog);
+    for (int k = 0; k < p.n; k++)
+        p.max_tol = fmax(p.max_tol, p.c[k].tol);
+    memcpy(p.end, p.c[p.n - 1].end, sizeof p.end);
+    prog_paths(&p);
+    run_opts o;
+    memset(&o, 0, sizeof o);
+    o.capacity = 57;
+    o.hold_at = o.resume_at = -1;
+    o.no_prepare = 1;
+    o.n_ovr = n_ovr;
+    for (int i = 0; i < n_ovr; i++) {
+        o.ovr_at[i] = at[i];
+        o.ovr_val[i] = val[i];
+    }
+    run_res r;
+    run(&p, &o, &r);
+    check_run(&p, &r, what, 0);
+    free(r.q);
+}
+
+static void test_override_commitment(void **state)
+{
+    (void)state;
+    const long at[3] = {93, 418, 1108};
+    const double val[3] = {0x1.e9ac41f6c2172p-1, 0x1.1deee12f2915p-1, 0x1.b10044df03de2p+0};
+    run_freeze_case(at, val, 3, "override decrease (seed 22514)");
+    const long at_up[3] = {at[0], 417, at[2]}; /* the increase to 100 % alone, one cycle before */
+    const double val_up[3] = {val[0], 1.0, val[2]};
+    run_freeze_case(at_up, val_up, 3, "override increase (seed 22514)");
+}
+
 /* Replacements planned 3 cycles ahead of the cruise sample they start at (a background task that needs time). */
 static void test_lead_cycles(void **state)
 {
@@ -892,13 +1042,21 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, (unsigned long long)g_count);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_block_size),      cmocka_unit_test(test_bad_blocks),
-        cmocka_unit_test(test_lines),           cmocka_unit_test(test_arcs),
-        cmocka_unit_test(test_mixed),           cmocka_unit_test(test_dense),
-        cmocka_unit_test(test_hold_resume),     cmocka_unit_test(test_override),
-        cmocka_unit_test(test_underrun),        cmocka_unit_test(test_resume_after_underrun),
-        cmocka_unit_test(test_no_prepare),      cmocka_unit_test(test_lead_cycles),
-        cmocka_unit_test(test_tick_cause_late), cmocka_unit_test(test_hold_sample_successor),
+        cmocka_unit_test(test_block_size),
+        cmocka_unit_test(test_bad_blocks),
+        cmocka_unit_test(test_lines),
+        cmocka_unit_test(test_arcs),
+        cmocka_unit_test(test_mixed),
+        cmocka_unit_test(test_dense),
+        cmocka_unit_test(test_hold_resume),
+        cmocka_unit_test(test_override),
+        cmocka_unit_test(test_underrun),
+        cmocka_unit_test(test_resume_after_underrun),
+        cmocka_unit_test(test_no_prepare),
+        cmocka_unit_test(test_lead_cycles),
+        cmocka_unit_test(test_tick_cause_late),
+        cmocka_unit_test(test_hold_sample_successor),
+        cmocka_unit_test(test_override_commitment),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

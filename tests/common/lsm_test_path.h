@@ -5,6 +5,9 @@
  * test_append_random_arc: one arc from p in a random plane (XY, ZX or YZ), radius log-uniform in [r_lo, r_hi] mm,
  * sweep uniform in [0.2, sw_hi] rad either way, one in five a helix (up to +-2 mm along the plane's normal). On
  * LSM_OK, p becomes the arc's end (as the planner stored it, rounded to lsm_real). A refused arc leaves p as it was.
+ *
+ * test_random_machine: X Y Z with unequal limits (v 50-1000 mm/s, a 500-2e4 mm/s², j 2e3-1e6 mm/s³, snap 1e6-1e9
+ * mm/s⁴, each log-uniform), a cycle uniform in [0.5 ms, cycle_hi_s]; path a and j limits on three machines in ten.
  */
 #ifndef LSM_TEST_PATH_H
 #define LSM_TEST_PATH_H
@@ -34,6 +37,23 @@ static inline lsm_status test_append_random_arc(lsm_planner *pl, uint64_t *st, d
     if (s == LSM_OK)
         memcpy(p, e, sizeof e);
     return s;
+}
+
+static inline void test_random_machine(uint64_t *st, lsm_planner_config *cfg, double cycle_hi_s)
+{
+    lsm_planner_default_config(cfg);
+    cfg->cycle_s = (lsm_real)test_uni(st, 0.0005, cycle_hi_s);
+    cfg->axis_mask = 0x7;
+    for (int i = 0; i < 3; i++) {
+        cfg->axis[i].v_max = (lsm_real)test_logu(st, 50, 1000);
+        cfg->axis[i].a_max = (lsm_real)test_logu(st, 500, 20000);
+        cfg->axis[i].j_max = (lsm_real)test_logu(st, 2000, 1e6);
+        cfg->axis[i].snap_max = (lsm_real)test_logu(st, 1e6, 1e9);
+    }
+    if (test_urand(st) < 0.3) {
+        cfg->path_a_max_mm_s2 = (lsm_real)test_logu(st, 300, 20000);
+        cfg->path_j_max_mm_s3 = (lsm_real)test_logu(st, 1000, 1e6);
+    }
 }
 
 #endif

@@ -199,22 +199,10 @@ static void check_block_spans(const lsm_planner *pl, uint32_t id, uint64_t *st, 
     }
 }
 
-/* A random machine: X Y Z with unequal limits; path limits on some. */
+/* A random machine (lsm_test_path.h), cycles up to 6 ms. */
 static void machine(uint64_t *st, lsm_planner_config *cfg)
 {
-    lsm_planner_default_config(cfg);
-    cfg->cycle_s = (lsm_real)test_uni(st, 0.0005, 0.006);
-    cfg->axis_mask = 0x7;
-    for (int i = 0; i < 3; i++) {
-        cfg->axis[i].v_max = (lsm_real)test_logu(st, 50, 1000);
-        cfg->axis[i].a_max = (lsm_real)test_logu(st, 500, 20000);
-        cfg->axis[i].j_max = (lsm_real)test_logu(st, 2000, 1e6);
-        cfg->axis[i].snap_max = (lsm_real)test_logu(st, 1e6, 1e9);
-    }
-    if (test_urand(st) < 0.3) {
-        cfg->path_a_max_mm_s2 = (lsm_real)test_logu(st, 300, 20000);
-        cfg->path_j_max_mm_s3 = (lsm_real)test_logu(st, 1000, 1e6);
-    }
+    test_random_machine(st, cfg, 0.006);
 }
 
 /* Appends one random line or arc from p (updated to its end). */

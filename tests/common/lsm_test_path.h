@@ -8,6 +8,9 @@
  *
  * test_random_machine: X Y Z with unequal limits (v 50-1000 mm/s, a 500-2e4 mm/s², j 2e3-1e6 mm/s³, snap 1e6-1e9
  * mm/s⁴, each log-uniform), a cycle uniform in [0.5 ms, cycle_hi_s]; path a and j limits on three machines in ten.
+ *
+ * test_random_planner: program `prog` of a run with seed `seed` (its own stream, st, mixed with `salt`): a random
+ * machine as above and an empty planner on it, starting at the origin.
  */
 #ifndef LSM_TEST_PATH_H
 #define LSM_TEST_PATH_H
@@ -54,6 +57,16 @@ static inline void test_random_machine(uint64_t *st, lsm_planner_config *cfg, do
         cfg->path_a_max_mm_s2 = (lsm_real)test_logu(st, 300, 20000);
         cfg->path_j_max_mm_s3 = (lsm_real)test_logu(st, 1000, 1e6);
     }
+}
+
+static inline lsm_status test_random_planner(lsm_planner *pl, lsm_pblock *store, uint32_t cap, uint64_t *st,
+                                             unsigned long seed, long prog, uint64_t salt, double cycle_hi_s)
+{
+    *st = (uint64_t)seed * 0x9E3779B97F4A7C15ull + (uint64_t)prog * 0xD1B54A32D192ED69ull + salt;
+    lsm_planner_config cfg;
+    test_random_machine(st, &cfg, cycle_hi_s);
+    const lsm_real start[LSM_MAX_AXES] = {0};
+    return lsm_planner_init(pl, &cfg, store, cap, start);
 }
 
 #endif

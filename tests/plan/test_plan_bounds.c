@@ -199,12 +199,6 @@ static void check_block_spans(const lsm_planner *pl, uint32_t id, uint64_t *st, 
     }
 }
 
-/* A random machine (lsm_test_path.h), cycles up to 6 ms. */
-static void machine(uint64_t *st, lsm_planner_config *cfg)
-{
-    test_random_machine(st, cfg, 0.006);
-}
-
 /* Appends one random line or arc from p (updated to its end). */
 static lsm_status append_one(lsm_planner *pl, uint64_t *st, double p[3])
 {
@@ -235,11 +229,8 @@ static void test_block_ratios_sound(void **state)
     static lsm_pblock store[CAP];
     static lsm_planner pl;
     for (long prog = 0; prog < g_count; prog++) {
-        uint64_t st = (uint64_t)g_seed * 0x9E3779B97F4A7C15ull + (uint64_t)prog * 0xD1B54A32D192ED69ull + 1u;
-        lsm_planner_config cfg;
-        machine(&st, &cfg);
-        const lsm_real start[LSM_MAX_AXES] = {0};
-        assert_int_equal(lsm_planner_init(&pl, &cfg, store, CAP, start), LSM_OK);
+        uint64_t st;
+        assert_int_equal(test_random_planner(&pl, store, CAP, &st, g_seed, prog, 1u, 0.006), LSM_OK);
         double p[3] = {0, 0, 0};
         for (int n = 0; n < 24 && lsm_planner_free(&pl) > 6; n++)
             (void)append_one(&pl, &st, p); /* (an arc that does not fit is refused: the next one is tried) */

@@ -43,12 +43,6 @@ typedef struct tally {
     long ramps, ok, fail, vviol, fail_both; /* fail_both: failing on a and on j */
 } tally;
 
-/* A random machine (lsm_test_path.h), cycles up to 4 ms. */
-static void machine(uint64_t *st, lsm_planner_config *cfg)
-{
-    test_random_machine(st, cfg, 0.004);
-}
-
 static lsm_status append_line(lsm_planner *pl, double p[3], const double d[3], double len, const lsm_planner_move *mv)
 {
     lsm_real e[LSM_MAX_AXES] = {0};
@@ -163,11 +157,8 @@ static void test_shortcuts_exact(void **state)
     static lsm_pblock store[CAP];
     static lsm_planner pl;
     for (long prog = 0; prog < g_count; prog++) {
-        uint64_t st = (uint64_t)g_seed * 0x9E3779B97F4A7C15ull + (uint64_t)prog * 0xD1B54A32D192ED69ull + 7u;
-        lsm_planner_config cfg;
-        machine(&st, &cfg);
-        const lsm_real start[LSM_MAX_AXES] = {0};
-        assert_int_equal(lsm_planner_init(&pl, &cfg, store, CAP, start), LSM_OK);
+        uint64_t st;
+        assert_int_equal(test_random_planner(&pl, store, CAP, &st, g_seed, prog, 7u, 0.004), LSM_OK);
         double p[3] = {0, 0, 0};
         for (int m = 0; m < 24 && lsm_planner_free(&pl) > 24; m++)
             append_one(&pl, &st, p);

@@ -513,6 +513,12 @@ static void replace_point(const lsm_interp *ip, swpt *w)
     boundary_point(ip, b, w);
 }
 
+/* The mode of a piece that replaces the rest of the current one: a hold if one is requested, else a replan. */
+static inline uint8_t replace_mode(const lsm_interp *ip)
+{
+    return ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+}
+
 /* What the interpolator needs next, and where; false: nothing. */
 static bool next_switch(const lsm_interp *ip, swpt *w)
 {
@@ -535,7 +541,7 @@ static bool next_switch(const lsm_interp *ip, swpt *w)
     if (CUR(ip).hold)
         return false; /* a hold runs to its end */
     if (ip->hold_req || ip->gen != pl->gen) {
-        w->mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+        w->mode = replace_mode(ip);
         replace_point(ip, w);
         if (w->kind == LSM_INTERP_SW_BOUNDARY && w->phase >= LSM_PIECE_PHASES && CUR(ip).stop)
             return false; /* the piece ends at rest anyway: the next one starts from there */
@@ -709,7 +715,7 @@ static bool ramp_start_ready(const lsm_interp *ip)
     if (!ip->bg || !(p == 0u || p == 8u) || !q->ready || q->kind != LSM_INTERP_SW_BOUNDARY)
         return false;
     return q->serial == ip->serial && q->gen == ip->pl->gen && q->phase == p + 1u &&
-           q->mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN);
+           q->mode == replace_mode(ip);
 }
 
 /* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
@@ -741,7 +747,7 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
     if (!(p == 1u || p == 8u || p == 9u || p == 16u))
         return false;
     if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p &&
-        ip->prep.mode == (ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN))
+        ip->prep.mode == replace_mode(ip))
         return true; /* (only a piece run_cycle will take: one for a hold since cancelled is not) */
     if ((p == 8u || p == 16u) && !CUR(ip).hold && lsm_planner_piece_stale(ip->pl))
         return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */
@@ -992,7 +998,7 @@ static void run_cycle(lsm_interp *ip, lsm_real first)
             memset(&w, 0, sizeof w);
             w.kind = LSM_INTERP_SW_BOUNDARY;
             w.phase = ip->phase;
-            w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+            w.mode = replace_mode(ip);
             if (ip->phase == 8u || ip->phase == 16u) { /* the end of the ramp: the horizon, as verified */
                 w.blk = ip->hz_blk;
                 w.off = ip->hz_off;
@@ -1116,7 +1122,7 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
             memset(&w, 0, sizeof w);
             w.kind = LSM_INTERP_SW_SAMPLE;
             w.cycle = ip->cycles;
-            w.mode = ip->hold_req ? LSM_PIECE_HOLD : LSM_PIECE_REPLAN;
+            w.mode = replace_mode(ip);
             w.blk = ip->blk;
             w.off = ip->off_mm;
             w.v = ip->v_mm_s;

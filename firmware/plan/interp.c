@@ -714,8 +714,7 @@ static bool ramp_start_ready(const lsm_interp *ip)
     const lsm_interp_prep *q = &ip->prep; /* (prep_ready, written out: a third caller kept it from being inlined) */
     if (!ip->bg || !(p == 0u || p == 8u) || !q->ready || q->kind != LSM_INTERP_SW_BOUNDARY)
         return false;
-    return q->serial == ip->serial && q->gen == ip->pl->gen && q->phase == p + 1u &&
-           q->mode == replace_mode(ip);
+    return q->serial == ip->serial && q->gen == ip->pl->gen && q->phase == p + 1u && q->mode == replace_mode(ip);
 }
 
 /* Takes the prepared piece q at its start: the cursor exactly there, first sample `first` after it. */
@@ -746,8 +745,7 @@ static bool stop_at_boundary(lsm_interp *ip, uint8_t p)
 {
     if (!(p == 1u || p == 8u || p == 9u || p == 16u))
         return false;
-    if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p &&
-        ip->prep.mode == replace_mode(ip))
+    if (prep_ready(ip, LSM_INTERP_SW_BOUNDARY) && ip->prep.phase == p && ip->prep.mode == replace_mode(ip))
         return true; /* (only a piece run_cycle will take: one for a hold since cancelled is not) */
     if ((p == 8u || p == 16u) && !CUR(ip).hold && lsm_planner_piece_stale(ip->pl))
         return true; /* the horizon of a piece whose path was trimmed beyond it: it must be replaced here */

@@ -264,9 +264,78 @@ typedef struct run_res {
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
 } run_res;
 
-static double dist_geom(const lsm_geom *g, const double x[3])
+/* The point x in an arc's frame: u, v in its plane about the centre, z along its normal from the start's level. */
+static void arc_frame(const lsm_geom *g, const double x[3], double *u, double *v, double *z)
 {
-    if (g->kind == LSM_GEOM_LINE) { /* closed form: distance to the segment */
+    const lsm_geom_arc *a = &g->u.arc;
+    const double n[3] = {(double)a->e1[1] * (double)a->e2[2] - (double)a->e1[2] * (double)a->e2[1],
+                         (double)a->e1[2] * (double)a->e2[0] - (double)a->e1[0] * (double)a->e2[2],
+                         (double)a->e1[0] * (double)a->e2[1] - (double)a->e1[1] * (double)a->e2[0]};
+    double ac[3];
+    test_arc_centre(g, ac);
+    *u = *v = *z = 0;
+    for (int i = 0; i < 3; i++) {
+        const double r = x[i] - ac[i];
+        *u += r * (double)a->e1[i];
+        *v += r * (double)a->e2[i];
+        *z += r * n[i];
+    }
+}
+
+/* A lower bound of the distance from x to a helix: the helix lies on the band of its cylinder (radius R, heights
+ * 0 .. axial), so no point of it is nearer than that band. Less a margin for the element's own evaluation rounding
+ * (float: positions of magnitude SPAN), so that the bound never exceeds the sampled distance below. */
+static double helix_lower_bound(const lsm_geom *g, const double x[3])
+{
+    double u, v, z;
+    arc_frame(g, x, &u, &v, &z);
+    const double R = (double)g->u.arc.radius_mm, ax = (double)g->u.arc.axial_mm;
+    const double zlo = fmin(0, ax), zhi = fmax(0, ax), dz = z < zlo ? zlo - z : z > zhi ? z - zhi : 0;
+    const double dr = sqrt(u * u + v * v) - R;
+    return sqrt(dr * dr + dz * dz) - (LSM_REAL_IS_FLOAT ? 1e-3 : 1e-9);
+}
+
+static double dist_at(const lsm_geom *g, const double x[3], double s)
+{
+    lsm_real q[LSM_MAX_AXES] = {0};
+    lsm_geom_eval(g, (lsm_real)s, q, NULL, NULL);
+    return sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
+}
+
+/* The distance from x to an element with no closed form here (a helix): sampled, then refined by golden section. */
+static double dist_sampled(const lsm_geom *g, const double x[3])
+{
+    const int N = 64;
+    double best = INFINITY, bs = 0;
+    for (int k = 0; k <= N; k++) {
+        const double s = (double)g->len * k / N, d = dist_at(g, x, s);
+        if (d < best) {
+            best = d;
+            bs = s;
+        }
+    }
+    double lo = fmax(0, bs - (double)g->len / N), hi = fmin((double)g->len, bs + (double)g->len / N);
+    for (int it = 0; it < 60; it++) {
+        const double m1 = lo + (hi - lo) * 0.382, m2 = lo + (hi - lo) * 0.618;
+        const double d1 = dist_at(g, x, m1), d2 = dist_at(g, x, m2);
+        if (d1 < d2)
+            hi = m2;
+        else
+            lo = m1;
+        best = fmin(best, fmin(d1, d2));
+    }
+    return best;
+}
+
+static bool has_closed_form(const lsm_geom *g)
+{
+    return g->kind == LSM_GEOM_LINE || (g->kind == LSM_GEOM_ARC && g->u.arc.axial_mm == 0);
+}
+
+/* The distance from x to a line or a planar arc, in closed form. */
+static double dist_closed(const lsm_geom *g, const double x[3])
+{
+    if (g->kind == LSM_GEOM_LINE) { /* the distance to the segment */
         const double L = (double)g->len;
         double t = 0, d2 = 0;
         for (int i = 0; i < 3; i++)
@@ -278,65 +347,43 @@ static double dist_geom(const lsm_geom *g, const double x[3])
         }
         return sqrt(d2);
     }
-    if (g->kind == LSM_GEOM_ARC && g->u.arc.axial_mm == 0) { /* closed form: planar arc */
-        const lsm_geom_arc *a = &g->u.arc;
-        const double n[3] = {(double)a->e1[1] * (double)a->e2[2] - (double)a->e1[2] * (double)a->e2[1],
-                             (double)a->e1[2] * (double)a->e2[0] - (double)a->e1[0] * (double)a->e2[2],
-                             (double)a->e1[0] * (double)a->e2[1] - (double)a->e1[1] * (double)a->e2[0]};
-        double u = 0, v = 0, z = 0, ac[3];
-        test_arc_centre(g, ac);
-        for (int i = 0; i < 3; i++) {
-            const double r = x[i] - ac[i];
-            u += r * (double)a->e1[i];
-            v += r * (double)a->e2[i];
-            z += r * n[i];
-        }
-        const double z2 = z * z, rho = sqrt(u * u + v * v), R = (double)a->radius_mm;
-        const double p0 = (double)a->phi0_rad, sw = (double)a->sweep_rad;
-        const double lo = fmin(p0, p0 + sw), hi = fmax(p0, p0 + sw);
-        double phi = atan2(v, u);
-        phi += 2 * LSM_PI * ceil((lo - phi) / (2 * LSM_PI)); /* the first angle >= lo */
-        if (phi <= hi || hi - lo >= 2 * LSM_PI)
-            return sqrt((rho - R) * (rho - R) + z2);
-        double best = INFINITY;
-        for (int k = 0; k < 2; k++) { /* outside the sweep: the nearer end */
-            const double q = k ? hi : lo, cu = R * cos(q), cv = R * sin(q);
-            best = fmin(best, sqrt((u - cu) * (u - cu) + (v - cv) * (v - cv) + z2));
-        }
-        return best;
+    const lsm_geom_arc *a = &g->u.arc; /* planar arc */
+    double u, v, z;
+    arc_frame(g, x, &u, &v, &z);
+    const double z2 = z * z, rho = sqrt(u * u + v * v), R = (double)a->radius_mm;
+    const double p0 = (double)a->phi0_rad, sw = (double)a->sweep_rad;
+    const double lo = fmin(p0, p0 + sw), hi = fmax(p0, p0 + sw);
+    double phi = atan2(v, u);
+    phi += 2 * LSM_PI * ceil((lo - phi) / (2 * LSM_PI)); /* the first angle >= lo */
+    if (phi <= hi || hi - lo >= 2 * LSM_PI)
+        return sqrt((rho - R) * (rho - R) + z2);
+    double best = INFINITY;
+    for (int k = 0; k < 2; k++) { /* outside the sweep: the nearer end */
+        const double q = k ? hi : lo, cu = R * cos(q), cv = R * sin(q);
+        best = fmin(best, sqrt((u - cu) * (u - cu) + (v - cv) * (v - cv) + z2));
     }
-    /* sampled, then refined by golden section (the elements are lines and arcs) */
-    const int N = 64;
-    double best = INFINITY, bs = 0;
-    for (int k = 0; k <= N; k++) {
-        const double s = (double)g->len * k / N;
-        lsm_real q[LSM_MAX_AXES] = {0};
-        lsm_geom_eval(g, (lsm_real)s, q, NULL, NULL);
-        const double d = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
-        if (d < best) {
-            best = d;
-            bs = s;
-        }
+    return best;
+}
+
+/* The distances from x to the elements e0 .. e0 + ne - 1 into dl, where every element that can matter to the
+ * tracker (a distance within max(best, trk)) gets its exact distance. A helix whose lower bound is already above
+ * that threshold is left at its bound: it can neither be the nearest element nor be within the threshold, and
+ * the threshold only falls as more exact distances come in. */
+static double dist_window(const prog *p, int e0, int ne, const double x[3], double trk, double *dl)
+{
+    double best = INFINITY;
+    for (int i = 0; i < ne; i++) {
+        const lsm_geom *g = &p->path[e0 + i];
+        dl[i] = has_closed_form(g) ? dist_closed(g, x) : helix_lower_bound(g, x);
+        if (has_closed_form(g))
+            best = fmin(best, dl[i]);
     }
-    double lo = fmax(0, bs - (double)g->len / N), hi = fmin((double)g->len, bs + (double)g->len / N);
-    for (int it = 0; it < 60; it++) {
-        const double m1 = lo + (hi - lo) * 0.382, m2 = lo + (hi - lo) * 0.618;
-        double d1, d2;
-        {
-            lsm_real q[LSM_MAX_AXES] = {0};
-            lsm_geom_eval(g, (lsm_real)m1, q, NULL, NULL);
-            d1 = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
-        }
-        {
-            lsm_real q[LSM_MAX_AXES] = {0};
-            lsm_geom_eval(g, (lsm_real)m2, q, NULL, NULL);
-            d2 = sqrt(pow(x[0] - q[0], 2) + pow(x[1] - q[1], 2) + pow(x[2] - q[2], 2));
-        }
-        if (d1 < d2)
-            hi = m2;
-        else
-            lo = m1;
-        best = fmin(best, fmin(d1, d2));
+    for (int i = 0; i < ne; i++) {
+        const lsm_geom *g = &p->path[e0 + i];
+        if (has_closed_form(g) || dl[i] > fmax(best, trk))
+            continue;
+        dl[i] = dist_sampled(g, x);
+        best = fmin(best, dl[i]);
     }
     return best;
 }
@@ -475,14 +522,12 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     const double trk = p->max_tol * (1 + 1e-6) + (LSM_REAL_IS_FLOAT ? 2e-4 : 1e-7);
     for (long k = 0; k < r->n; k += 3) {
         const double *x = &r->q[3 * k];
-        double best = INFINITY, dl[4096];
+        double dl[4096];
         int e0 = cur - 2 < 0 ? 0 : cur - 2, ne = 0;
         double len = 0;
-        for (int e = e0; e < p->n && ne < 4096 && (ne < 40 || len < reach); e++, ne++) {
-            dl[ne] = dist_geom(&p->path[e], x);
-            best = fmin(best, dl[ne]);
+        for (int e = e0; e < p->n && ne < 4096 && (ne < 40 || len < reach); e++, ne++)
             len += (double)p->path[e].len;
-        }
+        const double best = dist_window(p, e0, ne, x, trk, dl);
         int bi = cur;
         for (int i = 0; i < ne; i++)
             if (dl[i] <= fmax(best, trk)) {

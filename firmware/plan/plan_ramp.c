@@ -753,15 +753,13 @@ bool lsm_pl_accel_past_caps(pctx *pc, const ramp *r, lsm_real X0, lsm_real X1, l
                 len = pf.st[7].s_mm;
             }
             lsm_real s;
-            if (x < x_s + len && rprof_first_above(&pf, ceff, &s) && x_s + s < x1) {
-                if (x1 > x_s) {
-                    if (!(r->v0 > R0))
-                        return false; /* (from rest there is no lead cruise: the ramp starts at *xs or not at all) */
-                    x_s = x1;
-                    if (x_s + r->dist > X1 + tol) {
-                        *xs = x_s;
-                        return false;
-                    }
+            if (x < x_s + len && rprof_first_above(&pf, ceff, &s) && x_s + s < x1) { /* (s >= 0: x1 > x_s) */
+                if (!(r->v0 > R0))
+                    return false; /* (from rest there is no lead cruise: the ramp starts at *xs or not at all) */
+                x_s = x1;
+                if (x_s + r->dist > X1 + tol) {
+                    *xs = x_s;
+                    return false;
                 }
             }
         }

@@ -154,7 +154,8 @@ static void one_ramp(const pctx *pc0, const ramp *r, lsm_real X0, long prog, lon
 }
 
 /* Random accelerating ramps on the program in pl: from a random block, v0 up to its cap (a fifth from rest), v1 0.3
- * to 1.1 x its cap or (half of them) the highest cap, limits 0.1-4 x the budgets at rest there, from random points of the stretch. */
+ * to 1.1 x its cap or (half of them) the highest cap, limits 0.1-4 x the budgets at rest there, from random points
+ * of its first half (30 % at its start). */
 static void ramps_on(lsm_planner *pl, uint64_t *st, long prog, tally *t)
 {
     const uint32_t n = lsm_planner_count(pl);

@@ -209,6 +209,8 @@ typedef struct lsm_planner_stats {
     uint32_t plan_fallbacks; /* pieces that needed the conservative fallback (should stay 0) */
     uint32_t checks;         /* ramp verifications (cost indicator) */
     uint32_t bp_nodes;       /* node evaluations in backward passes */
+    uint32_t ovr_unkept;     /* override changes undone whose restored plan did not keep the commitment (should
+                                stay 0) */
 } lsm_planner_stats;
 
 /* The requests of the control cycle (interp.c's lsm_interp_step, the tick) to the planner, which belongs to the

@@ -400,18 +400,6 @@ static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far, uint32_t sw)
     lsm_pl_backward_pass(pl);
 }
 
-/* Does the plan just made keep the interpolator going (planner.h, "Commitment")? Its current piece still ends where it
- * can go on, or a verified piece starts at its horizon (then the current piece is stale: it is replaced there). */
-static bool ovr_commitment_ok(lsm_planner *pl)
-{
-    if (lsm_pl_commitment_kept(pl))
-        return true;
-    if (!lsm_pl_horizon_feasible(pl, true))
-        return false;
-    lsm_pl_mark_stale(pl);
-    return true;
-}
-
 /* The stopping-scale distance from v_now at block cur (a conservative ramp with OVR_LIMIT_SHARE of its limits). */
 static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
 {
@@ -455,7 +443,7 @@ static void ovr_seed_take(const lsm_planner *pl, ovr_seed *s)
 }
 
 /* Restores the override state (near, far, sw) with the seeded W as the nodes' first guesses; counts a restored plan
- * that still does not keep the commitment (stats.ovr_unkept: should stay 0). */
+ * that still does not keep the commitment (stats.restore_unkept: should stay 0). */
 static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_real far, uint32_t sw)
 {
     for (uint32_t i = 0; i < s->n; i++) {
@@ -464,8 +452,8 @@ static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_r
         b->w_mm_s = s->w[i];
     }
     ovr_apply(pl, near, far, sw);
-    if (!ovr_commitment_ok(pl))
-        pl->stats.ovr_unkept++;
+    if (!lsm_pl_commitment_ok(pl))
+        pl->stats.restore_unkept++;
 }
 
 /* The new factor f from a switch block on, beyond the stopping-scale distance from v_now (further out until a verified
@@ -500,7 +488,7 @@ static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_rea
         need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
     }
     ovr_apply(pl, keep, f, pl->tail);
-    if (!ovr_commitment_ok(pl))
+    if (!lsm_pl_commitment_ok(pl))
         ovr_restore(pl, seed, near0, far0, sw0); /* the plan the machine runs on, as it was */
 }
 
@@ -527,7 +515,7 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
         /* an increase (no block from the cursor on has a higher factor: near >= far) at once, if the machine can go
          * on with it (else as a decrease, beyond a switch) */
         ovr_apply(pl, f, f, cur);
-        if (ovr_commitment_ok(pl))
+        if (lsm_pl_commitment_ok(pl))
             return LSM_OK;
         pl->ovr_near = near0;
         pl->ovr_far = far0;

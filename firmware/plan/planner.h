@@ -209,7 +209,8 @@ typedef struct lsm_planner_stats {
     uint32_t plan_fallbacks; /* pieces that needed the conservative fallback (should stay 0) */
     uint32_t checks;         /* ramp verifications (cost indicator) */
     uint32_t bp_nodes;       /* node evaluations in backward passes */
-    uint32_t ovr_unkept;     /* override changes undone whose restored plan did not keep the commitment (should
+    uint32_t restore_unkept; /* plans restored after a change the machine could not follow (an override change
+                                undone, a junction made an exact stop) that still do not keep its commitment (should
                                 stay 0) */
 } lsm_planner_stats;
 

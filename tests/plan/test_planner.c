@@ -259,7 +259,7 @@ typedef struct run_res {
     double max_dev;
     double held_motion; /* largest move while held */
     long held_cycles;
-    uint32_t fallbacks, underruns, ovr_unkept;
+    uint32_t fallbacks, underruns, restore_unkept;
     uint32_t tick_plans, prepared;
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
 } run_res;
@@ -461,7 +461,7 @@ static void run(const prog *p, const run_opts *o, run_res *r)
         }
     }
     r->fallbacks = pl.stats.plan_fallbacks;
-    r->ovr_unkept = pl.stats.ovr_unkept;
+    r->restore_unkept = pl.stats.restore_unkept;
     r->tick_plans = ip.tick_plans;
     for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
         r->tick_cause[i] = ip.tick_cause[i];
@@ -574,9 +574,9 @@ static void check_run(const prog *p, const run_res *r, const char *what, long c)
     }
     if (r->fallbacks)
         fail_msg("%s %ld (seed %lu): %u fallback pieces", what, c, g_seed, r->fallbacks);
-    if (r->ovr_unkept)
-        fail_msg("%s %ld (seed %lu): %u override changes undone without the commitment kept", what, c, g_seed,
-                 r->ovr_unkept);
+    if (r->restore_unkept)
+        fail_msg("%s %ld (seed %lu): %u restored plans without the commitment kept", what, c, g_seed,
+                 r->restore_unkept);
 }
 
 /* Pieces planned inside the cycle, per program: each has a cause (interp.h, lsm_interp_tick_cause). Without

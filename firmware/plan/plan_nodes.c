@@ -464,7 +464,7 @@ static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_r
  * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
  * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
  * cursor: blocks beyond it back at `keep`), the previous state stays. */
-static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
+static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
 {
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
@@ -483,13 +483,15 @@ static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_rea
         if (lsm_pl_horizon_feasible(pl, false)) {
             if (!lsm_pl_commitment_kept(pl))
                 lsm_pl_mark_stale(pl); /* (a verified piece from the horizon: just checked) */
-            return;
+            return true;
         }
         need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
     }
     ovr_apply(pl, keep, f, pl->tail);
-    if (!lsm_pl_commitment_ok(pl))
-        ovr_restore(pl, seed, near0, far0, sw0); /* the plan the machine runs on, as it was */
+    if (lsm_pl_commitment_ok(pl))
+        return true;
+    ovr_restore(pl, seed, near0, far0, sw0); /* the plan the machine runs on, as it was */
+    return false;
 }
 
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
@@ -521,6 +523,5 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
         pl->ovr_far = far0;
         pl->ovr_switch = sw0;
     }
-    ovr_switch_search(pl, f, cur, v_now, &seed);
-    return LSM_OK;
+    return ovr_switch_search(pl, f, cur, v_now, &seed) ? LSM_OK : LSM_E_PL_OVR_LATER;
 }

@@ -51,7 +51,13 @@ def core_objects(map_path):
 
     def comp(path):
         m = re.search(r"liblsm_[a-z]+_f\.a\((\S+?)(\.obj|\.o)?\)", path)
-        return "core:" + m.group(1) if m else orig(path)
+        if m:
+            return "core:" + m.group(1)
+        # LSM_ARM_LTO: the core is compiled for link-time optimisation and nothing else is (the apps and the board
+        # support are not), so the link-time unit's output objects (/tmp/ccXXXX.ltrans0.ltrans.o) are the core
+        if re.search(r"/cc\w+\.(ltrans\d+\.ltrans|lto)\.o$", path.strip()):
+            return "core:(link-time unit)"
+        return orig(path)
 
     arm_mapsize.component = comp
     try:

@@ -8,17 +8,89 @@ lsm_planner_plan_piece, ...) by linking with -Wl,--wrap=FUNCTION (firmware/apps/
 link-time optimisation of the core (LSM_ARM_LTO) the calls between core objects are resolved inside the link-time
 unit, so the linker's --wrap never sees them (GCC PR 88643) and the wrappers count nothing. The link still keeps
 FUNCTION out of line and global (bench_planner.c refers to __real_FUNCTION), so this script does after the link
-what --wrap does before it: every Thumb-2 BL / B.W to FUNCTION outside __wrap_FUNCTION is re-encoded to branch to
-__wrap_FUNCTION (same length, nothing moves). It fails (exit 1, image unchanged) if FUNCTION or its wrapper is
+what --wrap does before it: every Thumb-2 BL / B.W to FUNCTION from inside the link-time unit (address ranges from
+IMAGE.elf.map) is re-encoded to branch to __wrap_FUNCTION (same length, nothing moves). It fails (exit 1, image unchanged) if FUNCTION or its wrapper is
 missing, if a clone of FUNCTION exists (FUNCTION.constprop.0, .isra.0, .part.0: calls to it would be missed), if
-FUNCTION's address is stored as data (a function pointer), if a call is of another form, or if no call reaches
-__wrap_FUNCTION (calls from objects outside the link-time unit are wrapped by the linker as usual).
+FUNCTION's address is stored as data (a function pointer), if a call is of another form, if no call reaches
+__wrap_FUNCTION (calls from objects outside the link-time unit are wrapped by the linker as usual), or if FUNCTION
+may clobber fewer registers than the AAPCS allows (then its callers, compiled with -fipa-ra, may keep values in
+registers the wrapper clobbers: FUNCTION must reach a function outside the link-time unit, or the wrapper must keep
+every register but the result's, as the trampolines of bench_planner.c do). Reads IMAGE.elf.map.
 """
 import re
 import subprocess
 import sys
 
 CLONE_RE = r"\.(constprop|isra|part|cold)\.\d+$"
+LTRANS_RE = re.compile(r"/cc\w+\.(ltrans\d+\.ltrans|lto)\.o$")
+
+
+def unit_ranges(map_path):
+    """[start, end) of every input section of the link-time unit, from the linker map."""
+    out, name_only = [], False
+    for line in open(map_path, errors="replace"):
+        m = re.match(r"^ (\.\S+)\s+0x([0-9a-f]+)\s+0x([0-9a-f]+)\s+(\S.*)$", line)
+        if not m and name_only:
+            m = re.match(r"^\s+()0x([0-9a-f]+)\s+0x([0-9a-f]+)\s+(\S.*)$", line)
+        name_only = bool(re.match(r"^ \.\S+$", line))
+        if m and LTRANS_RE.search(m.group(4).strip()):
+            start = int(m.group(2), 16)
+            out.append((start, start + int(m.group(3), 16)))
+    return out
+
+
+def keeps_registers(wrapper, dis):
+    """True if wrapper starts as the register-keeping trampolines of bench_planner.c (BENCH_LTO_TRAMPOLINES): it
+    pushes r1-r3 (and r0 if there is no result), r12 and s0-s15 before anything else, and pops them at its end."""
+    body, inside = [], False
+    for line in dis:
+        if re.match(r"^[0-9a-f]+ <(\S+)>:$", line):
+            inside = line.rstrip().endswith(f"<{wrapper}>:")
+            continue
+        if inside:
+            m = re.match(r"^\s*[0-9a-f]+:\s+(.*\S)\s*$", line)
+            if m:
+                body.append(re.sub(r"\s+", " ", m.group(1)))
+    regs = r"\{(r0, )?r1, r2, r3, r4, (r5, )?ip, %s\}"
+    return len(body) >= 4 and re.fullmatch(r"(push|stmdb sp!,) " + regs % "lr", body[0]) is not None \
+        and body[1] == "vpush {s0-s15}" and "vpop {s0-s15}" in body \
+        and any(re.fullmatch(r"(pop|ldmia(\.w)? sp!,) " + regs % "pc", b) for b in body)
+
+
+def clobbers_all(fn, dis, syms, unit):
+    """True if fn surely clobbers every register the AAPCS lets a call clobber: it reaches (through direct calls
+    and tail calls) a function outside the link-time unit or an indirect call. Then GCC's interprocedural register
+    allocation (-fipa-ra), which lets a caller keep values in the call-clobbered registers its callee does not
+    touch, cannot have used a smaller clobber set for fn, and a call of fn may go to another AAPCS function."""
+    calls, where = {}, None
+    for line in dis:
+        m = re.match(r"^([0-9a-f]+) <(\S+)>:$", line)
+        if m:
+            where = m.group(2)
+            calls.setdefault(where, set())
+            continue
+        if where is None:
+            continue
+        m = re.match(r"^\s*[0-9a-f]+:\s+(bl|blx|b\.w|b\.n|b|b[a-z]{2}\.w|bx)\s+(\S+)(?: <([^>+]+)>)?", line)
+        if not m:
+            continue
+        op, arg, target = m.group(1), m.group(2), m.group(3)
+        if op in ("blx", "bx") and arg != "lr":
+            calls[where].add(None)  # indirect: unknown callee
+        elif target and target != where and target in syms:
+            calls[where].add(target)
+    in_unit = lambda f: any(a <= syms[f] < b for a, b in unit)
+    seen, todo = set(), [fn]
+    while todo:
+        f = todo.pop()
+        if f in seen:
+            continue
+        seen.add(f)
+        for g in calls.get(f, ()):
+            if g is None or not in_unit(g):
+                return True
+            todo.append(g)
+    return False
 
 
 def run(*cmd):
@@ -66,6 +138,7 @@ def main(argv):
     vma, foff, _ = text_section(elf)
     data = bytearray(open(elf, "rb").read())
     dis = run("arm-none-eabi-objdump", "-d", "--no-show-raw-insn", "-j", ".text", elf).splitlines()  # data as .word
+    unit = unit_ranges(elf + ".map")
     err = []
     patches = []
     for fn in funcs:
@@ -76,6 +149,10 @@ def main(argv):
         if clones:
             err.append(f"{fn} has clones {clones}: their calls cannot be redirected")
         addr, wrap = syms[fn], syms["__wrap_" + fn]
+        if any(a <= addr < b for a, b in unit) and not clobbers_all(fn, dis, syms, unit) and \
+                not keeps_registers("__wrap_" + fn, dis):
+            err.append(f"{fn} may clobber fewer registers than a call may (-fipa-ra): its callers may keep values "
+                       "in registers the wrapper clobbers")
         word = re.compile(r"^\s*[0-9a-f]+:\s+\.word\s+0x0*%x$" % (addr | 1))
         if any(word.match(line) for line in dis):
             err.append(f"the address of {fn} is stored as data (a function pointer?)")
@@ -89,9 +166,11 @@ def main(argv):
             if m and int(m.group(3), 16) == wrap and m.group(4) == "__wrap_" + fn:
                 linked += 1  # a call from outside the link-time unit, which --wrap redirected
                 continue
-            if not m or int(m.group(3), 16) != addr or m.group(4) != fn or where == "__wrap_" + fn:
+            if not m or int(m.group(3), 16) != addr or m.group(4) != fn:
                 continue
             pc, op = int(m.group(1), 16), m.group(2)
+            if not any(a <= pc < b for a, b in unit):
+                continue  # a call from outside the link-time unit: the wrapper's own, or one --wrap already saw
             if op not in ("bl", "b.w"):
                 err.append(f"0x{pc:x} in {where}: '{op}' to {fn} (only bl and b.w are redirected)")
                 continue

@@ -80,13 +80,13 @@ static wstat g_w_psize, g_w_pphase;
  * result's (r0; none for void) across the C wrapper bench_w_X, re-pushing the arguments passed on the stack. */
 #ifdef BENCH_LTO_TRAMPOLINES
 #define WRAP(x) bench_w_##x
-#define TRAMPOLINE(x, save, pre, post)                                                                             \
-    __attribute__((naked)) void __wrap_##x(void);                                                                  \
-    __attribute__((naked)) void __wrap_##x(void)                                                                   \
-    {                                                                                                              \
-        __asm volatile("push {" save ", r12, lr}\n\t"                                                               \
-                       "vpush {s0-s15}\n\t" pre "bl bench_w_" #x "\n\t" post "vpop {s0-s15}\n\t"                 \
-                       "pop {" save ", r12, pc}\n\t");                                                              \
+#define TRAMPOLINE(x, save, pre, post)                                                           \
+    __attribute__((naked)) void __wrap_##x(void);                                                \
+    __attribute__((naked)) void __wrap_##x(void)                                                 \
+    {                                                                                            \
+        __asm volatile("push {" save ", r12, lr}\n\t"                                            \
+                       "vpush {s0-s15}\n\t" pre "bl bench_w_" #x "\n\t" post "vpop {s0-s15}\n\t" \
+                       "pop {" save ", r12, pc}\n\t");                                           \
     }
 #define R0_OUT "r1-r4"   /* result in r0: keep r1-r3 (r4: 8-byte alignment, and scratch) */
 #define VOID_OUT "r0-r5" /* no result: keep r0-r3 too (r4, r5: alignment) */
@@ -108,9 +108,9 @@ static void wadd(wstat *w, uint32_t c)
 lsm_status __real_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
                                     lsm_corner_result *out);
 lsm_status WRAP(lsm_corner_smooth)(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                                    lsm_corner_result *out);
+                                   lsm_corner_result *out);
 lsm_status WRAP(lsm_corner_smooth)(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                                    lsm_corner_result *out)
+                                   lsm_corner_result *out)
 {
     const uint32_t t0 = now();
     const lsm_status r = __real_lsm_corner_smooth(b1, b2, p, out);
@@ -121,9 +121,9 @@ lsm_status WRAP(lsm_corner_smooth)(const lsm_geom *b1, const lsm_geom *b2, const
 bool __real_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
                            const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
 bool WRAP(lsm_arcfit_fit)(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
+                          const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
 bool WRAP(lsm_arcfit_fit)(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res)
+                          const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res)
 {
     const uint32_t t0 = now();
     const bool r = __real_lsm_arcfit_fit(p0, q, n, tol_mm, plane_n, g, res);
@@ -134,9 +134,9 @@ bool WRAP(lsm_arcfit_fit)(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, l
 lsm_status __real_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
                                          lsm_piece_mode mode, lsm_piece *out);
 lsm_status WRAP(lsm_planner_plan_piece)(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
-                                         lsm_piece_mode mode, lsm_piece *out);
+                                        lsm_piece_mode mode, lsm_piece *out);
 lsm_status WRAP(lsm_planner_plan_piece)(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
-                                         lsm_piece_mode mode, lsm_piece *out)
+                                        lsm_piece_mode mode, lsm_piece *out)
 {
     const uint32_t ch0 = pl->stats.checks;
     g_in_piece = true;
@@ -161,9 +161,9 @@ TRAMPOLINE(lsm_planner_plan_piece, R0_OUT, "", "")
 bool __real_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
                                         lsm_scurve_intervals *out);
 bool WRAP(lsm_scurve_strict_intervals)(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                        lsm_scurve_intervals *out);
+                                       lsm_scurve_intervals *out);
 bool WRAP(lsm_scurve_strict_intervals)(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                        lsm_scurve_intervals *out)
+                                       lsm_scurve_intervals *out)
 {
     if (!g_w_ramp_on && !g_in_piece)
         return __real_lsm_scurve_strict_intervals(lim, cycle_s, dv_mm_s, out);
@@ -188,8 +188,7 @@ void WRAP(lsm_phase_end)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *s
 
 void __real_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
                               lsm_kin *out);
-void WRAP(lsm_phase_advance)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
-                              lsm_kin *out);
+void WRAP(lsm_phase_advance)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out);
 void WRAP(lsm_phase_advance)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out)
 {
     if (!g_w_ramp_on && !g_in_piece) {

@@ -64,7 +64,8 @@ echo "|---|---:|"
 awk '$1=="size" {printf "| %s | %s |\n", $2, $3}' "$LOG"
 
 echo
-echo "Float core archive, per object (arm-none-eabi-size; everything compiled, before --gc-sections):"
+echo "Float core archive, per object (arm-none-eabi-size; everything compiled, before --gc-sections; with LSM_ARM_LTO"
+echo "the plain code of the fat LTO objects, not what the link-time optimisation makes of it):"
 echo
 echo "| object | text (flash) | data | bss |"
 echo "|---|---:|---:|---:|"

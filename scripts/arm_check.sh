@@ -5,6 +5,8 @@
 #   3. fails if an image links a heap allocator (malloc, free, _sbrk, ...) or newlib's stdio (printf family);
 #   4. fails if an image links software double-precision routines (__aeabi_d*, __aeabi_f2d, ...); lists, as
 #      warnings, every such routine and every double libm call the float core archive refers to;
+#   4b. fails if an image uses fused multiply-add (VFMA/VFMS/VFNMA/VFNMS) outside newlib's libm: the core must
+#      round as the host does (bit-exact contour check below), with or without link-time optimisation;
 #   5. runs lissom-selftest.elf, lissom-contour.elf and lissom-bench.elf under qemu-system-arm -M mps2-an386
 #      -icount shift=0 with a timeout and requires exit code 0 and their PASS line; runs lissom-faulttest.elf and
 #      requires the HardFault report and exit code 99; boots lissom-controller.elf for 5 s and requires its ready
@@ -70,6 +72,8 @@ for img in "${IMAGES[@]}"; do
 done
 [ ${#ELFS[@]} -gt 0 ] && arm-none-eabi-size "${ELFS[@]}"
 arm-none-eabi-size -t "${CORE[@]}" | tail -1 | awk '{printf "float core archive (all objects): text %s data %s bss %s\n", $1, $2, $3}'
+lto=$(sed -n 's/^LSM_ARM_LTO:BOOL=//p' "$BUILD/CMakeCache.txt")
+[ "$lto" = ON ] && echo "note: LSM_ARM_LTO=ON: the core is linked with link-time optimisation (fat objects: the archive figures are its plain code; skipped: $(sed -n 's/^LSM_ARM_LTO_SKIP:STRING=//p' "$BUILD/CMakeCache.txt"))"
 
 echo "== no heap, no stdio"
 # heap: malloc family and its reentrant forms, sbrk; stdio: the printf family and what it drags in
@@ -93,7 +97,7 @@ for elf in "${ELFS[@]}"; do
     if [ -n "$bad" ]; then fail "double-$(basename "$elf" .elf)"; echo "  $(basename "$elf"): $bad"
     else echo "ok: $(basename "$elf"): no double-precision routines"; fi
 done
-warn=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
+warn=$(arm-none-eabi-nm --target=elf32-littlearm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
        grep -E " ($(sed 's/^\^//;s/\$$//' <<<"$DBL_RE")|$(sed 's/^\^//;s/\$$//' <<<"$LIBM_D_RE"))$" |
        sed -E 's#^.*\(?liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 if [ -n "$warn" ]; then
@@ -102,10 +106,25 @@ if [ -n "$warn" ]; then
 else
     echo "ok: float core archive refers to no double-precision routine"
 fi
-info=$(arm-none-eabi-nm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
+info=$(arm-none-eabi-nm --target=elf32-littlearm -A "${CORE[@]}" 2>/dev/null | awk 'NF > 1 && $(NF-1)=="U"{print $1" "$NF}' |
        grep -E ' __aeabi_(ldivmod|uldivmod|l2f|ul2f|f2lz|f2ulz|llsl|llsr|lasr|lmul)$' |
        sed -E 's#^.*liblsm_[a-z]+_f\.a:##; s#:$##' | sort -u)
 [ -n "$info" ] && { echo "note: 64-bit integer helpers (software routines) used by the float core:"; sed 's/^/  /' <<<"$info"; }
+
+echo "== no fused multiply-add outside libm"
+# VFMA/VFMS/VFNMA/VFNMS round once where the host rounds twice: the core must not use them (GCC keeps the
+# -ffp-contract=off of -std=c11 per function, through link-time optimisation too; the cross build also says it).
+# newlib's libm (sinf, cbrtf, ... in the bench) may: its functions are skipped.
+LIBM=$(arm-none-eabi-gcc $(sed -n 's/^set(LSM_ARM_CPU_FLAGS "\(.*\)")$/\1/p' "$ROOT/cmake/arm-none-eabi.cmake") \
+       -print-file-name=libm.a)
+libm_fns=$(arm-none-eabi-nm --defined-only "$LIBM" 2>/dev/null | awk 'NF == 3 && $2 ~ /[TtWw]/ {print $3}' | sort -u)
+for elf in "${ELFS[@]}"; do
+    fused=$(arm-none-eabi-objdump -d "$elf" | awk '/^[0-9a-f]+ <.*>:$/ {f = substr($2, 2, length($2) - 3)}
+                                                    /\tvfn?m[as]\./ {print f}' | sort -u |
+            grep -vxF -f <(echo "$libm_fns") | tr '\n' ' ')
+    if [ -n "$fused" ]; then fail "fused-fp-$(basename "$elf" .elf)"; echo "  $(basename "$elf"): $fused"
+    else echo "ok: $(basename "$elf"): no fused multiply-add outside libm"; fi
+done
 
 echo "== QEMU mps2-an386 -icount shift=0 (timeout ${QEMU_TIMEOUT}s)"
 run_image() {  # image, the line it must print (regex), expected exit status

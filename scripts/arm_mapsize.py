@@ -4,7 +4,7 @@
 usage: arm_mapsize.py IMAGE.elf.map [...]
 
 Every input section placed in the image is attributed to its archive (liblsm_plan_f.a, libm.a, ...) or object
-file. Flash = .isr_vector + .text (code and constants) + .ARM.exidx + the initial values of .data;
+file; with link-time optimisation (LSM_ARM_LTO) the link-time unit's output, which holds only the core, is one. Flash = .isr_vector + .text (code and constants) + .ARM.exidx + the initial values of .data;
 RAM = .data + .bss. Prints one markdown table per image. Exit 2 if a map file cannot be read or parsed.
 """
 import re
@@ -26,6 +26,8 @@ def component(path):
     m = re.search(r"([^/]+\.a)\(", path)
     if m:
         return m.group(1)
+    if re.search(r"/cc\w+\.(ltrans\d+\.ltrans|lto)\.o$", path.strip()):
+        return "core, link-time unit (LSM_ARM_LTO)"  # GCC's LTO output: only the core is compiled with -flto
     return Path(path.strip()).name
 
 

@@ -6,7 +6,8 @@ usage: arm_report.py BENCH_LOG CONTOUR_LOG CONTOUR_MAP [--ramp RAMP_LOG] [--gcc 
 
 BENCH_LOG: output of lissom-bench.elf ("bench", "size", "note" lines, bench_main.c / bench_planner.c);
 CONTOUR_LOG: output of lissom-contour.elf (stack high-water mark, checksum); CONTOUR_MAP: its linker map, whose
-core objects (the component archives liblsm_<component>_f.a) are the flash of the core with a 128-block look-ahead (the image links only what
+core objects (the component archives liblsm_<component>_f.a; with LSM_ARM_LTO also the link-time unit's output, which
+holds only core objects) are the flash of the core with a 128-block look-ahead (the image links only what
 the planner, the interpolator and the contour program need). RAMP_LOG: output of lissom-bench-ramp.elf (the
 planner's ramp sizing and phase evaluation inside appends). scripts/arm_report.sh builds and runs everything
 and calls this. Exit 2 if an input is missing or lacks a figure.
@@ -51,7 +52,13 @@ def core_objects(map_path):
 
     def comp(path):
         m = re.search(r"liblsm_[a-z]+_f\.a\((\S+?)(\.obj|\.o)?\)", path)
-        return "core:" + m.group(1) if m else orig(path)
+        if m:
+            return "core:" + m.group(1)
+        # LSM_ARM_LTO: the core is compiled for link-time optimisation and nothing else is (the apps and the board
+        # support are not), so the link-time unit's output objects (/tmp/ccXXXX.ltrans0.ltrans.o) are the core
+        if re.search(r"/cc\w+\.(ltrans\d+\.ltrans|lto)\.o$", path.strip()):
+            return "core:(link-time unit)"
+        return orig(path)
 
     arm_mapsize.component = comp
     try:
@@ -198,7 +205,11 @@ def main(argv):
       f"{n(size.get('lookahead_128_blocks', 0))} |")
     p(f"| stack high-water mark of the contour image (main loop + SysTick handler with FPU context) | "
       f"{n(stack) if stack is not None else '?'} |")
-    p(f"| core flash, the core archives (`liblsm_*_f.a`) as linked into `lissom-contour.elf` (`--gc-sections`) | **{n(core_flash)}** |")
+    lto = "(link-time unit)" in core
+    how = ("; link-time optimised: the link-time unit, which holds only core objects, and the core objects "
+           "outside it" if lto else "")
+    p(f"| core flash, the core archives (`liblsm_*_f.a`) as linked into `lissom-contour.elf` (`--gc-sections`{how}) "
+      f"| **{n(core_flash)}** |")
     p(f"| + newlib libm / libc (`memcpy`, `memset`, `floorf`, `ceilf`, ...) | {n(libm)} / {n(libc)} |")
     p(f"| core static RAM (.data + .bss of the core) | {core_ram} |")
     if args.size:
@@ -206,7 +217,8 @@ def main(argv):
         p(f"| whole `lissom-contour.elf` (`arm-none-eabi-size`: text / data / bss; bss = look-ahead, samples, "
           f"port) | {n(int(f[0]))} / {n(int(f[1]))} / {n(int(f[2]))} |")
     p("")
-    p("Core flash per object (`lissom-contour.elf`): " + ", ".join(
+    p("Core flash per object (`lissom-contour.elf`" + (", LTO: its link-time unit is one part; per object: "
+                                                        "configure with `-DLSM_ARM_LTO=OFF`" if lto else "") + "): " + ", ".join(
         f"{k} {n(v[0])}" for k, v in sorted(core.items(), key=lambda kv: -kv[1][0])) + ".")
     p("")
     p("**Goals** (issue 7):")

@@ -2,33 +2,36 @@
 # Soak benchmark (docs/reliability.md): the seeded randomized test programs at large counts, in chunks with
 # distinct seeds, double and float, each chunk a separate process (run J at a time):
 #   test_scurve_props[_float] SEED N   N velocity changes + N/8 moves (limits, exact ends, stepgen = closed form)
+#   test_scurve_props[_float] SEED 0 M M moves alone (--moves)
 #   test_planner[_float] SEED N        12 x N random paths through the planner and interpolator (limits, deviation,
 #                                      exact end, no stall, no fallback)
 #   test_sim_fixstep SEED N            N moves on the integer-only evaluator against the double reference
-# Usage: scripts/soak.sh [--vc N] [--paths N] [--fixstep N] [--jobs J] [--seed S] [--only double|float]
+# Usage: scripts/soak.sh [--vc N] [--moves N] [--paths N] [--fixstep N] [--jobs J] [--seed S] [--only double|float]
 #   defaults: the issue's goal, --vc 10000000 --paths 1000000 --fixstep 1000000 (many CPU hours: pass smaller
-#   counts on a shared machine); --jobs 1; --seed 1000.
+#   counts on a shared machine), --moves 0 (moves beyond the vc chunks' N/8); --jobs 1; --seed 1000.
 # Writes out/soak/<program>-<seed>.log per chunk and out/soak/summary.txt; ends with "soak: N passed, N failed"
 # (chunks). A failing chunk prints its seed: rerun it alone with the same SEED and its count.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
-vc=10000000; paths=1000000; fix=1000000; jobs=1; seed=1000; only=""
+vc=10000000; moves=0; paths=1000000; fix=1000000; jobs=1; seed=1000; only=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --vc) vc=$2; shift 2 ;;
+    --moves) moves=$2; shift 2 ;;
     --paths) paths=$2; shift 2 ;;
     --fixstep) fix=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --only) only=$2; shift 2 ;;
-    *) echo "usage: scripts/soak.sh [--vc N] [--paths N] [--fixstep N] [--jobs J] [--seed S] [--only double|float]"
+    *) echo "usage: scripts/soak.sh [--vc N] [--moves N] [--paths N] [--fixstep N] [--jobs J] [--seed S] [--only double|float]"
        exit 2 ;;
   esac
 done
 
-VC_CHUNK=200000      # velocity changes per process (about 70 s of CPU)
-PATH_CHUNK=120       # random paths per process (12 scenarios x 10; about 2 s of CPU)
+VC_CHUNK=200000      # velocity changes per process (and 25 000 moves; about 20 s of CPU)
+MOVE_CHUNK=25000     # moves per process of --moves (about 15 s of CPU)
+PATH_CHUNK=120       # random paths per process (12 scenarios x 10; about 0.5 s of CPU)
 FIX_CHUNK=20000      # fixstep moves per process
 
 cmake --preset host >/dev/null || exit 1
@@ -38,12 +41,16 @@ out=out/soak
 mkdir -p "$out"
 jobsfile=$(mktemp)
 
-# plan(PROGRAM TOTAL CHUNK DIV): chunk lines "PROGRAM SEED COUNT" (COUNT = chunk / DIV: the program's own unit)
+# plan(PROGRAM TOTAL CHUNK DIV [MOVES]): chunk lines "PROGRAM SEED COUNT" (COUNT = chunk / DIV: the program's own
+# unit); with MOVES, "PROGRAM SEED 0 COUNT" (moves alone, seeds from SEED + MOVE_SEEDS: a vc chunk of the same
+# seed draws the same first moves).
+MOVE_SEEDS=100000
 plan() {
-  local prog=$1 total=$2 chunk=$3 div=$4 s=$seed done_=0 n
+  local prog=$1 total=$2 chunk=$3 div=$4 mv=${5:-} done_=0 n s=$seed
+  [ -n "${5:-}" ] && s=$((seed + MOVE_SEEDS))
   while [ "$done_" -lt "$total" ]; do
     n=$((total - done_ < chunk ? total - done_ : chunk))
-    echo "$prog $s $(( (n + div - 1) / div ))" >>"$jobsfile"
+    if [ -n "$mv" ]; then echo "$prog $s 0 $n" >>"$jobsfile"; else echo "$prog $s $(( (n + div - 1) / div ))" >>"$jobsfile"; fi
     done_=$((done_ + n)); s=$((s + 1))
   done
 }
@@ -52,13 +59,14 @@ variants=("" "_float")
 [ "$only" = float ] && variants=("_float")
 for v in "${variants[@]}"; do
   [ "$vc" -gt 0 ] && plan "test_scurve_props$v" "$vc" $VC_CHUNK 1
+  [ "$moves" -gt 0 ] && plan "test_scurve_props$v" "$moves" $MOVE_CHUNK 1 moves
   [ "$paths" -gt 0 ] && plan "test_planner$v" "$paths" $PATH_CHUNK 12
 done
 [ "$fix" -gt 0 ] && [ "$only" != float ] && plan test_sim_fixstep "$fix" $FIX_CHUNK 1
 
 t0=$(date +%s)
-# each chunk: its log, then "PASS|FAIL program seed count"
-xargs -P "$jobs" -L 1 sh -c 'build/bin/$0 $1 $2 >'"$out"'/$0-$1.log 2>&1 && echo "PASS $0 $1 $2" || echo "FAIL $0 $1 $2"' \
+# each chunk: its log, then "PASS|FAIL program seed count [moves]"
+xargs -P "$jobs" -L 1 sh -c 'build/bin/$0 $1 $2 $3 >'"$out"'/$0-$1.log 2>&1 && echo "PASS $0 $1 $2 $3" || echo "FAIL $0 $1 $2 $3"' \
   <"$jobsfile" >"$out/results.txt"
 t1=$(date +%s)
 rm -f "$jobsfile"
@@ -72,7 +80,8 @@ npass=$(grep -c '^PASS' "$out/results.txt"); nfail=$(grep -c '^FAIL' "$out/resul
       c=$(awk -v p="$p$v" '$1=="PASS" && $2==p {s+=$4} END {print s+0}' "$out/results.txt")
       f=$(awk -v p="$p$v" '$1=="FAIL" && $2==p {n++} END {print n+0}' "$out/results.txt")
       if [ "$p" = test_scurve_props ]; then
-        echo "  $name: $c velocity changes and $((c / 8)) moves passed, $f failing chunks"
+        m=$(awk -v p="$p$v" '$1=="PASS" && $2==p {s+=(NF>=5 ? $5 : int($4/8))} END {print s+0}' "$out/results.txt")
+        echo "  $name: $c velocity changes and $m moves passed, $f failing chunks"
       else
         progs=$(cat "$out"/$p$v-*.log 2>/dev/null | grep -oE ": [0-9]+ programs" | grep -oE "[0-9]+" | awk '{s+=$1} END {print s+0}')
         echo "  $name: $progs random paths passed (count $c x 12 scenarios), $f failing chunks"

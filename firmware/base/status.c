@@ -36,6 +36,7 @@ const char *lsm_status_str(lsm_status st)
     case LSM_E_PL_FINISHED: return "planner: block appended after the end of the program";
     case LSM_E_PL_CAPACITY: return "planner: block storage too small";
     case LSM_E_PL_OVERRIDE: return "feed override outside 0 .. 200 %";
+    case LSM_E_PL_OVR_LATER: return "feed override not applied yet (the machine cannot follow it from here)";
     case LSM_E_GC_UNKNOWN_WORD: return "G-code: unknown word";
     case LSM_E_GC_MISSING_ARG: return "G-code: word without a number";
     case LSM_E_GC_SYNTAX: return "G-code: syntax error";

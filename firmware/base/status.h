@@ -57,10 +57,12 @@ typedef enum lsm_status {
     LSM_E_TOL_UNREACHED = -51, /* G2 path: the tolerance is not reached with the segments the storage holds */
 
     /* look-ahead planner and interpolator (planner.c, interp.c) */
-    LSM_E_PL_AXIS = -60,     /* planner: a block moves an axis the machine does not have (axis mask) */
-    LSM_E_PL_FINISHED = -61, /* planner: a block appended after lsm_planner_finish (end of program) */
-    LSM_E_PL_CAPACITY = -62, /* planner: block storage smaller than LSM_PLANNER_MIN_BLOCKS */
-    LSM_E_PL_OVERRIDE = -63, /* feed override outside 0 .. 2 (0 .. 200 %) */
+    LSM_E_PL_AXIS = -60,      /* planner: a block moves an axis the machine does not have (axis mask) */
+    LSM_E_PL_FINISHED = -61,  /* planner: a block appended after lsm_planner_finish (end of program) */
+    LSM_E_PL_CAPACITY = -62,  /* planner: block storage smaller than LSM_PLANNER_MIN_BLOCKS */
+    LSM_E_PL_OVERRIDE = -63,  /* feed override outside 0 .. 2 (0 .. 200 %) */
+    LSM_E_PL_OVR_LATER = -64, /* planner: feed override not applied yet: the machine cannot follow it from here (the
+                                 plan stays as it was; the interpolator retries it) */
 
     /* G-code parser (gcode.c); every one comes with the line and column of the offending text */
     LSM_E_GC_UNKNOWN_WORD = -80,   /* a letter, G or M number outside the supported subset */

@@ -1179,10 +1179,21 @@ static lsm_status prepare_successor(lsm_interp *ip, swpt *w)
     return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
 }
 
+/* lsm_interp_prepare: an override the planner could not apply, tried again once the machine runs a new piece. */
+static void retry_override(lsm_interp *ip)
+{
+    if (!ip->ovr_retry || ip->ovr_zero || ip->serial == ip->ovr_try_serial)
+        return;
+    ip->ovr_try_serial = ip->serial;
+    if (lsm_planner_set_override(ip->pl, ip->ovr, ip->blk, ip->v_mm_s) != LSM_E_PL_OVR_LATER)
+        ip->ovr_retry = 0;
+}
+
 lsm_status lsm_interp_prepare(lsm_interp *ip)
 {
     if (ip == NULL)
         return LSM_E_NULL;
+    retry_override(ip);
     ip->bg = 1;
     ip->bg_cycles = ip->cycles;
     ip->bg_gen = ip->pl->gen;
@@ -1238,8 +1249,16 @@ lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real f)
         ip->hold_req = 0;
     }
     ip->ovr = f;
-    return lsm_planner_set_override(ip->pl, f, ip->blk, ip->v_mm_s);
+    ip->ovr_retry = 0;
+    const lsm_status st = lsm_planner_set_override(ip->pl, f, ip->blk, ip->v_mm_s);
+    if (st != LSM_E_PL_OVR_LATER)
+        return st;
+    ip->ovr_later++;
+    ip->ovr_retry = 1;
+    ip->ovr_try_serial = ip->serial;
+    return LSM_OK;
 }
+
 
 lsm_real lsm_interp_feed(const lsm_interp *ip)
 {

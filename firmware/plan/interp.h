@@ -215,7 +215,10 @@ typedef struct lsm_interp {
     uint64_t took_cycle; /* the step count when a piece was last taken (TP_SHORT: in the current step) */
     uint32_t bg_gen;
     uint8_t bg_hold;
-    uint8_t reserved3[3];
+    uint8_t ovr_retry; /* the override ovr is not applied yet (LSM_E_PL_OVR_LATER): lsm_interp_prepare retries it */
+    uint8_t reserved3[2];
+    uint32_t ovr_try_serial; /* the piece (serial) when it was last tried: retried once per new piece */
+    uint32_t ovr_later;      /* override changes the planner could not apply at once (then retried) */
 } lsm_interp;
 
 /* Start at rest at the planner's start position. Errors: LSM_E_NULL. Background, while the cycle does not run. */
@@ -237,8 +240,10 @@ lsm_status lsm_interp_prepare(lsm_interp *ip);
 void lsm_interp_hold(lsm_interp *ip);
 void lsm_interp_resume(lsm_interp *ip);
 
-/* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
- * Background. */
+/* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Where the planner cannot apply it from the machine's
+ * state (LSM_E_PL_OVR_LATER: rare, the plan stays as it was), it is kept and lsm_interp_prepare tries it again once
+ * per new piece until it applies or another factor replaces it; ovr_later counts these. Errors: LSM_E_NULL,
+ * LSM_E_NAN, LSM_E_PL_OVERRIDE. Background. */
 lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real factor);
 
 /* Current feed along the path (mm/s) and state. Control cycle (or after it, in a synchronous loop). */

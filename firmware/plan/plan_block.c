@@ -386,6 +386,8 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         pl->stats.horizon_stops++;
         pl->full_pass = 1;
         lsm_pl_backward_pass(pl);
+        if (!lsm_pl_commitment_ok(pl))
+            pl->stats.restore_unkept++;
     } else if (stales) {
         lsm_pl_mark_stale(pl);
     }

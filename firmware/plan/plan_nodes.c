@@ -22,6 +22,9 @@
 #define OVR_NEED_SCALE LSM_R(2.0)
 #define OVR_NEED_CYCLES LSM_R(4.0)
 #define OVR_TRIES 8
+/* Nodes whose W the restoring pass is seeded with (ovr_seed): the first links of the chain the interpolator's
+ * commitment rests on, from the end of its current piece on (16 x 8 B of stack in the background). */
+#define OVR_SEED_NODES 16
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* distance probes (continuous ramps)                                                                           */
@@ -397,18 +400,6 @@ static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far, uint32_t sw)
     lsm_pl_backward_pass(pl);
 }
 
-/* Does the plan just made keep the interpolator going (planner.h, "Commitment")? Its current piece still ends where it
- * can go on, or a verified piece starts at its horizon (then the current piece is stale: it is replaced there). */
-static bool ovr_commitment_ok(lsm_planner *pl)
-{
-    if (lsm_pl_commitment_kept(pl))
-        return true;
-    if (!lsm_pl_horizon_feasible(pl, true))
-        return false;
-    lsm_pl_mark_stale(pl);
-    return true;
-}
-
 /* The stopping-scale distance from v_now at block cur (a conservative ramp with OVR_LIMIT_SHARE of its limits). */
 static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
 {
@@ -423,6 +414,48 @@ static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
     return R0;
 }
 
+/* The W of the first nodes from the end of the interpolator's current piece on, as they were before an override change
+ * was tried. A W is not a function of the caps alone: node_w starts from the node's previous W and feasibility is not
+ * monotone in the speed, so a fresh pass with the old factors after the failed trials can find a lower W than the
+ * one the machine is committed to (seed 30028: 4.7794 instead of 4.78458 mm/s at the node after the current piece's
+ * end, from which that end speed, 5.01285 mm/s, could no longer go on, and the machine stood still). Put back as the
+ * nodes' previous W before the restoring pass, each is found again where it is still verified against the node
+ * after it. */
+typedef struct ovr_seed {
+    uint32_t n;
+    uint32_t id[OVR_SEED_NODES];
+    lsm_real w[OVR_SEED_NODES];
+} ovr_seed;
+
+static void ovr_seed_take(const lsm_planner *pl, ovr_seed *s)
+{
+    const uint32_t e = pl->horizon_end;
+    s->n = 0;
+    for (uint32_t id = id_lt(e, pl->head) || !id_lt(e, pl->tail) ? pl->head : e;
+         id != pl->tail && s->n < OVR_SEED_NODES; id++) {
+        const lsm_pblock *b = blk(pl, id);
+        if (b->flags & LSM_PB_NODE) {
+            s->id[s->n] = id;
+            s->w[s->n] = b->w_mm_s;
+            s->n++;
+        }
+    }
+}
+
+/* Restores the override state (near, far, sw) with the seeded W as the nodes' first guesses; counts a restored plan
+ * that still does not keep the commitment (stats.restore_unkept: should stay 0). */
+static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_real far, uint32_t sw)
+{
+    for (uint32_t i = 0; i < s->n; i++) {
+        lsm_pblock *b = blk(pl, s->id[i]);
+        b->flags |= LSM_PB_NODE;
+        b->w_mm_s = s->w[i];
+    }
+    ovr_apply(pl, near, far, sw);
+    if (!lsm_pl_commitment_ok(pl))
+        pl->stats.restore_unkept++;
+}
+
 /* The new factor f from a switch block on, beyond the stopping-scale distance from v_now (further out until a verified
  * piece starts at the interpolator's commitment point), the factor in force at the cursor (`keep`) before it: nothing
  * the machine is committed to changes. A factor raised where the piece ends may lower W there too (feasibility is not
@@ -431,7 +464,7 @@ static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
  * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
  * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
  * cursor: blocks beyond it back at `keep`), the previous state stays. */
-static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
+static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
 {
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
@@ -450,13 +483,15 @@ static void ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_rea
         if (lsm_pl_horizon_feasible(pl, false)) {
             if (!lsm_pl_commitment_kept(pl))
                 lsm_pl_mark_stale(pl); /* (a verified piece from the horizon: just checked) */
-            return;
+            return true;
         }
         need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
     }
     ovr_apply(pl, keep, f, pl->tail);
-    if (!ovr_commitment_ok(pl))
-        ovr_apply(pl, near0, far0, sw0); /* the plan the machine runs on, as it was */
+    if (lsm_pl_commitment_ok(pl))
+        return true;
+    ovr_restore(pl, seed, near0, far0, sw0); /* the plan the machine runs on, as it was */
+    return false;
 }
 
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now)
@@ -476,16 +511,17 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
     }
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
+    ovr_seed seed;
+    ovr_seed_take(pl, &seed);
     if (f >= ovr_of(pl, cur)) {
         /* an increase (no block from the cursor on has a higher factor: near >= far) at once, if the machine can go
          * on with it (else as a decrease, beyond a switch) */
         ovr_apply(pl, f, f, cur);
-        if (ovr_commitment_ok(pl))
+        if (lsm_pl_commitment_ok(pl))
             return LSM_OK;
         pl->ovr_near = near0;
         pl->ovr_far = far0;
         pl->ovr_switch = sw0;
     }
-    ovr_switch_search(pl, f, cur, v_now);
-    return LSM_OK;
+    return ovr_switch_search(pl, f, cur, v_now, &seed) ? LSM_OK : LSM_E_PL_OVR_LATER;
 }

@@ -406,6 +406,18 @@ bool lsm_pl_commitment_kept(lsm_planner *pl)
     return ok;
 }
 
+/* Does the plan just made keep the interpolator going (planner.h, "Commitment")? Its current piece still ends where it
+ * can go on, or a verified piece starts at its horizon (then the current piece is stale: it is replaced there). */
+bool lsm_pl_commitment_ok(lsm_planner *pl)
+{
+    if (lsm_pl_commitment_kept(pl))
+        return true;
+    if (!lsm_pl_horizon_feasible(pl, true))
+        return false;
+    lsm_pl_mark_stale(pl);
+    return true;
+}
+
 void lsm_planner_release(lsm_planner *pl, uint32_t id)
 {
     if (pl == NULL)

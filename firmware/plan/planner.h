@@ -209,6 +209,9 @@ typedef struct lsm_planner_stats {
     uint32_t plan_fallbacks; /* pieces that needed the conservative fallback (should stay 0) */
     uint32_t checks;         /* ramp verifications (cost indicator) */
     uint32_t bp_nodes;       /* node evaluations in backward passes */
+    uint32_t restore_unkept; /* plans restored after a change the machine could not follow (an override change
+                                undone, a junction made an exact stop) that still do not keep its commitment (should
+                                stay 0) */
 } lsm_planner_stats;
 
 /* The requests of the control cycle (interp.c's lsm_interp_step, the tick) to the planner, which belongs to the
@@ -338,7 +341,9 @@ lsm_real lsm_planner_block_cap(const lsm_planner *pl, uint32_t id);
 /*
  * Feed override factor 0 .. 2. Decreases take effect beyond the distance the machine needs to slow down from
  * v_now_mm_s (at block cur_blk); increases at once, if the interpolator's commitment still holds (else like a
- * decrease: a higher factor can lower a node's W); the blocks before the switch keep the factor in force at cur_blk. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
+ * decrease: a higher factor can lower a node's W); the blocks before the switch keep the factor in force at cur_blk.
+ * LSM_E_PL_OVR_LATER where it fits nowhere, not even for the blocks appended later: the plan stays as it was (the
+ * interpolator retries). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE.
  * (The interpolator calls this; 0 is handled there as a feed hold.) Background.
  */
 lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real factor, uint32_t cur_blk, lsm_real v_now_mm_s);

@@ -236,5 +236,7 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
 lsm_status lsm_pl_push_or_hold(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6]);
 /* Does the interpolator's current piece still end where it may go on? */
 bool lsm_pl_commitment_kept(lsm_planner *pl);
+/* Kept, or a verified piece starts at the interpolator's horizon (the current piece is then marked stale)? */
+bool lsm_pl_commitment_ok(lsm_planner *pl);
 
 #endif /* LSM_PLANNER_INT_H */

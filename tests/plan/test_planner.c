@@ -259,7 +259,9 @@ typedef struct run_res {
     double max_dev;
     double held_motion; /* largest move while held */
     long held_cycles;
-    uint32_t fallbacks, underruns;
+    uint32_t fallbacks, underruns, restore_unkept;
+    uint32_t ovr_later;   /* override changes the planner could not apply at once (interp.h) */
+    uint32_t ovr_retried; /* of these, applied later by lsm_interp_prepare (the planner's factor then the one asked) */
     uint32_t tick_plans, prepared;
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
 } run_res;
@@ -436,8 +438,12 @@ static void run(const prog *p, const run_opts *o, run_res *r)
             if (k == o->ovr_at[i])
                 assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)o->ovr_val[i]), LSM_OK);
         lsm_real pos[LSM_MAX_AXES];
-        if (!o->no_prepare)
+        if (!o->no_prepare) {
+            const uint8_t pending = ip.ovr_retry;
             (void)lsm_interp_prepare(&ip);
+            if (pending && !ip.ovr_retry && pl.ovr_far == ip.ovr)
+                r->ovr_retried++;
+        }
         const lsm_interp_state s = lsm_interp_step(&ip, pos);
         if (r->n == cap) {
             cap *= 2;
@@ -461,6 +467,8 @@ static void run(const prog *p, const run_opts *o, run_res *r)
         }
     }
     r->fallbacks = pl.stats.plan_fallbacks;
+    r->restore_unkept = pl.stats.restore_unkept;
+    r->ovr_later = ip.ovr_later;
     r->tick_plans = ip.tick_plans;
     for (int i = 0; i < LSM_INTERP_TP_CAUSES; i++)
         r->tick_cause[i] = ip.tick_cause[i];
@@ -573,6 +581,9 @@ static void check_run(const prog *p, const run_res *r, const char *what, long c)
     }
     if (r->fallbacks)
         fail_msg("%s %ld (seed %lu): %u fallback pieces", what, c, g_seed, r->fallbacks);
+    if (r->restore_unkept)
+        fail_msg("%s %ld (seed %lu): %u restored plans without the commitment kept", what, c, g_seed,
+                 r->restore_unkept);
 }
 
 /* Pieces planned inside the cycle, per program: each has a cause (interp.h, lsm_interp_tick_cause). Without
@@ -601,9 +612,41 @@ static void check_tick_plans(const run_res *r, int no_prepare, int lead, const c
                  r->tick_cause[LSM_INTERP_TP_MISSED], r->tick_cause[LSM_INTERP_TP_SHORT]);
 }
 
+static uint64_t rng_of(unsigned long seed, int salt)
+{
+    return 0x9E3779B97F4A7C15ull ^ ((uint64_t)seed * 0x100000001B3ull) ^ (uint64_t)salt;
+}
+
 static uint64_t rng(int salt)
 {
-    return 0x9E3779B97F4A7C15ull ^ ((uint64_t)g_seed * 0x100000001B3ull) ^ (uint64_t)salt;
+    return rng_of(g_seed, salt);
+}
+
+/* The next case of a scenario's stream rs: its program and run options; false if the program came out empty. */
+static bool draw_case(prog *p, run_opts *o, uint64_t *rs, int kind, int mode)
+{
+    gen(p, rs, kind);
+    if (p->n == 0)
+        return false;
+    memset(o, 0, sizeof *o);
+    o->capacity = kind == 3 ? 256 : 16 + (uint32_t)(test_urand(rs) * 64);
+    o->hold_at = o->resume_at = -1;
+    o->no_prepare = mode == 4 || mode == 5;
+    o->lead_cycles = mode >= 6 ? 3u : 0u;
+    if (mode == 1 || mode == 4 || mode == 6) { /* hold and resume */
+        o->hold_at = 20 + (long)(test_urand(rs) * 400);
+        o->resume_at = o->hold_at + 200 + (long)(test_urand(rs) * 300);
+    } else if (mode == 2 || mode == 5 || mode == 7) { /* override changes */
+        o->n_ovr = 3;
+        for (int i = 0; i < 3; i++) {
+            o->ovr_at[i] = 10 + (long)(test_urand(rs) * 1500);
+            o->ovr_val[i] = urand(rs, 0.1, 2.0);
+        }
+    } else if (mode == 3) { /* slow appending */
+        o->feed_every = 5 + (int)(test_urand(rs) * 40);
+        o->capacity = 32;
+    }
+    return true;
 }
 
 static void scenario(int kind, const char *name, int mode)
@@ -612,28 +655,9 @@ static void scenario(int kind, const char *name, int mode)
     static prog p;
     long ok = 0, underruns = 0, held = 0, tick_plans = 0, prepared = 0, cause[LSM_INTERP_TP_CAUSES] = {0};
     for (long c = 0; c < g_count; c++) {
-        gen(&p, &rs, kind);
-        if (p.n == 0)
-            continue;
         run_opts o;
-        memset(&o, 0, sizeof o);
-        o.capacity = kind == 3 ? 256 : 16 + (uint32_t)(test_urand(&rs) * 64);
-        o.hold_at = o.resume_at = -1;
-        o.no_prepare = mode == 4 || mode == 5;
-        o.lead_cycles = mode >= 6 ? 3u : 0u;
-        if (mode == 1 || mode == 4 || mode == 6) { /* hold and resume */
-            o.hold_at = 20 + (long)(test_urand(&rs) * 400);
-            o.resume_at = o.hold_at + 200 + (long)(test_urand(&rs) * 300);
-        } else if (mode == 2 || mode == 5 || mode == 7) { /* override changes */
-            o.n_ovr = 3;
-            for (int i = 0; i < 3; i++) {
-                o.ovr_at[i] = 10 + (long)(test_urand(&rs) * 1500);
-                o.ovr_val[i] = urand(&rs, 0.1, 2.0);
-            }
-        } else if (mode == 3) { /* slow appending */
-            o.feed_every = 5 + (int)(test_urand(&rs) * 40);
-            o.capacity = 32;
-        }
+        if (!draw_case(&p, &o, &rs, kind, mode))
+            continue;
         run_res r;
         run(&p, &o, &r);
         check_run(&p, &r, name, c);
@@ -826,6 +850,34 @@ static void run_freeze_case(const long *at, const double *val, int n_ovr, const 
     run_res r;
     run(&p, &o, &r);
     check_run(&p, &r, what, 0);
+    free(r.q);
+}
+
+/* Case `index` of scenario (kind, mode) under seed `seed`, run and checked as the scenario would (a soak finding);
+ * the result in *r (r->q to free). */
+static void replay_case(unsigned long seed, int kind, int mode, long index, const char *what, run_res *r)
+{
+    static prog p;
+    uint64_t rs = rng_of(seed, kind * 131 + mode);
+    run_opts o;
+    for (long c = 0; c <= index; c++)
+        if (!draw_case(&p, &o, &rs, kind, mode))
+            assert_true(c < index); /* (the case itself is not empty) */
+    run(&p, &o, r);
+    check_run(&p, r, what, index);
+}
+
+/* An override change that fits nowhere is undone; the plan restored must be one the machine can follow. A fresh pass
+ * with the old factors found a lower W after the current piece's end than the one it had been committed to, and the
+ * machine stood still at 5.01 mm/s (soak of 2026-11-27, double; plan_nodes.c, ovr_seed). */
+static void test_override_restore(void **state)
+{
+    (void)state;
+    run_res r;
+    replay_case(30028, 2, 2, 9, "override undone (seed 30028)", &r);
+    /* the change undone (to 68.8 % at cycle 214) is kept and applied once the machine runs a new piece */
+    assert_true(r.ovr_later >= 1);
+    assert_true(r.ovr_retried >= 1);
     free(r.q);
 }
 
@@ -1102,6 +1154,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_tick_cause_late),
         cmocka_unit_test(test_hold_sample_successor),
         cmocka_unit_test(test_override_commitment),
+        cmocka_unit_test(test_override_restore),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -73,6 +73,30 @@ static uint32_t g_piece_checks;
 static wstat g_w_psize, g_w_pphase;
 #endif
 
+/* The wrappers. Without link-time optimisation they are the linker's __wrap_X (-Wl,--wrap=X). With it
+ * (BENCH_LTO_TRAMPOLINES, LSM_ARM_LTO), the calls inside the link-time unit are redirected to __wrap_X after the link
+ * (scripts/arm_lto_wrap.py), and there a caller may keep values in the call-clobbered registers that X does not
+ * touch (GCC's -fipa-ra knows X's clobbers): __wrap_X is then a trampoline that keeps every register but the
+ * result's (r0; none for void) across the C wrapper bench_w_X, re-pushing the arguments passed on the stack. */
+#ifdef BENCH_LTO_TRAMPOLINES
+#define WRAP(x) bench_w_##x
+#define TRAMPOLINE(x, save, pre, post)                                                           \
+    __attribute__((naked)) void __wrap_##x(void);                                                \
+    __attribute__((naked)) void __wrap_##x(void)                                                 \
+    {                                                                                            \
+        __asm volatile("push {" save ", r12, lr}\n\t"                                            \
+                       "vpush {s0-s15}\n\t" pre "bl bench_w_" #x "\n\t" post "vpop {s0-s15}\n\t" \
+                       "pop {" save ", r12, pc}\n\t");                                           \
+    }
+#define R0_OUT "r1-r4"   /* result in r0: keep r1-r3 (r4: 8-byte alignment, and scratch) */
+#define VOID_OUT "r0-r5" /* no result: keep r0-r3 too (r4, r5: alignment) */
+/* two words of arguments on the stack: at sp + 88 / + 92 after the pushes of R0_OUT (24 B) and s0-s15 (64 B) */
+#define PUSH_TWO_STACK_ARGS "ldr r4, [sp, #88]\n\tldr r12, [sp, #92]\n\tpush {r4, r12}\n\t"
+#define POP_TWO_STACK_ARGS "add sp, #8\n\t"
+#else
+#define WRAP(x) __wrap_##x
+#endif
+
 static void wadd(wstat *w, uint32_t c)
 {
     w->calls++;
@@ -83,10 +107,10 @@ static void wadd(wstat *w, uint32_t c)
 
 lsm_status __real_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
                                     lsm_corner_result *out);
-lsm_status __wrap_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                                    lsm_corner_result *out);
-lsm_status __wrap_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
-                                    lsm_corner_result *out)
+lsm_status WRAP(lsm_corner_smooth)(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
+                                   lsm_corner_result *out);
+lsm_status WRAP(lsm_corner_smooth)(const lsm_geom *b1, const lsm_geom *b2, const lsm_corner_params *p,
+                                   lsm_corner_result *out)
 {
     const uint32_t t0 = now();
     const lsm_status r = __real_lsm_corner_smooth(b1, b2, p, out);
@@ -96,10 +120,10 @@ lsm_status __wrap_lsm_corner_smooth(const lsm_geom *b1, const lsm_geom *b2, cons
 
 bool __real_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
                            const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
-bool __wrap_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
-bool __wrap_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
-                           const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res)
+bool WRAP(lsm_arcfit_fit)(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
+                          const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res);
+bool WRAP(lsm_arcfit_fit)(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real tol_mm,
+                          const lsm_arcfit_plane *plane_n, lsm_geom *g, lsm_arcfit_result *res)
 {
     const uint32_t t0 = now();
     const bool r = __real_lsm_arcfit_fit(p0, q, n, tol_mm, plane_n, g, res);
@@ -109,10 +133,10 @@ bool __wrap_lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, 
 
 lsm_status __real_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
                                          lsm_piece_mode mode, lsm_piece *out);
-lsm_status __wrap_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
-                                         lsm_piece_mode mode, lsm_piece *out);
-lsm_status __wrap_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
-                                         lsm_piece_mode mode, lsm_piece *out)
+lsm_status WRAP(lsm_planner_plan_piece)(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
+                                        lsm_piece_mode mode, lsm_piece *out);
+lsm_status WRAP(lsm_planner_plan_piece)(lsm_planner *pl, uint32_t blk, lsm_real off_mm, lsm_real v0_mm_s,
+                                        lsm_piece_mode mode, lsm_piece *out)
 {
     const uint32_t ch0 = pl->stats.checks;
     g_in_piece = true;
@@ -124,16 +148,22 @@ lsm_status __wrap_lsm_planner_plan_piece(lsm_planner *pl, uint32_t blk, lsm_real
     return r;
 }
 
+#ifdef BENCH_LTO_TRAMPOLINES
+TRAMPOLINE(lsm_corner_smooth, R0_OUT, "", "")
+TRAMPOLINE(lsm_arcfit_fit, R0_OUT, PUSH_TWO_STACK_ARGS, POP_TWO_STACK_ARGS) /* g, res on the stack */
+TRAMPOLINE(lsm_planner_plan_piece, R0_OUT, "", "")
+#endif
+
 #ifdef BENCH_RAMP_WRAP
 /* Only in lissom-bench-ramp.elf (these wrappers would add instructions to every figure of lissom-bench.elf):
  * ramp work of the planner, sizing (lsm_scurve_strict_intervals) and phase evaluation (lsm_phase_end /
  * lsm_phase_advance, used by the ramp verification), timed while g_w_ramp_on is set (inside the appends). */
 bool __real_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
                                         lsm_scurve_intervals *out);
-bool __wrap_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                        lsm_scurve_intervals *out);
-bool __wrap_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
-                                        lsm_scurve_intervals *out)
+bool WRAP(lsm_scurve_strict_intervals)(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
+                                       lsm_scurve_intervals *out);
+bool WRAP(lsm_scurve_strict_intervals)(const lsm_scurve_limits *lim, lsm_real cycle_s, lsm_real dv_mm_s,
+                                       lsm_scurve_intervals *out)
 {
     if (!g_w_ramp_on && !g_in_piece)
         return __real_lsm_scurve_strict_intervals(lim, cycle_s, dv_mm_s, out);
@@ -144,8 +174,8 @@ bool __wrap_lsm_scurve_strict_intervals(const lsm_scurve_limits *lim, lsm_real c
 }
 
 void __real_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out);
-void __wrap_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out);
-void __wrap_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out)
+void WRAP(lsm_phase_end)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out);
+void WRAP(lsm_phase_end)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_kin *out)
 {
     if (!g_w_ramp_on && !g_in_piece) {
         __real_lsm_phase_end(ph, cycle_s, start, out);
@@ -158,9 +188,8 @@ void __wrap_lsm_phase_end(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *
 
 void __real_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
                               lsm_kin *out);
-void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s,
-                              lsm_kin *out);
-void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out)
+void WRAP(lsm_phase_advance)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out);
+void WRAP(lsm_phase_advance)(const lsm_phase *ph, lsm_real cycle_s, const lsm_kin *start, lsm_real tau_s, lsm_kin *out)
 {
     if (!g_w_ramp_on && !g_in_piece) {
         __real_lsm_phase_advance(ph, cycle_s, start, tau_s, out);
@@ -170,6 +199,11 @@ void __wrap_lsm_phase_advance(const lsm_phase *ph, lsm_real cycle_s, const lsm_k
     __real_lsm_phase_advance(ph, cycle_s, start, tau_s, out);
     wadd(g_in_piece ? &g_w_pphase : &g_w_phase, since(t0));
 }
+#ifdef BENCH_LTO_TRAMPOLINES
+TRAMPOLINE(lsm_scurve_strict_intervals, R0_OUT, "", "")
+TRAMPOLINE(lsm_phase_end, VOID_OUT, "", "")
+TRAMPOLINE(lsm_phase_advance, VOID_OUT, "", "")
+#endif
 #endif
 
 /* ---- programs ---- */

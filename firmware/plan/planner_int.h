@@ -173,6 +173,11 @@ bool lsm_pl_fit_decel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real 
 /* Accelerating ramp v0 -> v1 from X0 on, as early as it verifies; its start in *xs_out. */
 bool lsm_pl_fit_accel(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real v1, bool check_trail, ramp *r,
                       lsm_real *xs_out);
+/* Moves *xs, the start of the accelerating ramp r, past every block whose cap the ramp would exceed there as its
+ * verification tests the caps (one pass over the blocks: plan_ramp.c); false: a cap below its start speed is in the
+ * way, it starts from rest and would have to move, or it no longer fits before X1 (*xs: the start it was moved to).
+ * X0: the start of the stretch (the rounding tolerance of the fit, as in the fitting). */
+bool lsm_pl_accel_past_caps(pctx *pc, const ramp *r, lsm_real X0, lsm_real X1, lsm_real *xs);
 /* Decelerating ramp starting exactly at X0 (override catch-up, feed hold). */
 bool lsm_pl_fit_decel_now(pctx *pc, lsm_real X0, lsm_real X1, lsm_real v0, lsm_real v1, ramp *r);
 

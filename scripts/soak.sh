@@ -37,7 +37,7 @@ FIX_CHUNK=20000      # fixstep moves per process
 cmake --preset host >/dev/null || exit 1
 cmake --build build -j "$jobs" --target test_scurve_props test_scurve_props_float test_planner test_planner_float \
       test_sim_fixstep >/dev/null || exit 1
-out=out/soak
+out=${SOAK_OUT:-out/soak} # (SOAK_OUT: another directory, for two soaks at once from one build)
 mkdir -p "$out"
 jobsfile=$(mktemp)
 

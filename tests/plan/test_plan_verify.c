@@ -43,43 +43,6 @@ typedef struct tally {
     long ramps, ok, fail, vviol, fail_both; /* fail_both: failing on a and on j */
 } tally;
 
-static lsm_status append_line(lsm_planner *pl, double p[3], const double d[3], double len, const lsm_planner_move *mv)
-{
-    lsm_real e[LSM_MAX_AXES] = {0};
-    for (int i = 0; i < 3; i++)
-        e[i] = (lsm_real)(p[i] + len * d[i]);
-    const lsm_status s = lsm_planner_append_line(pl, e, mv);
-    if (s == LSM_OK)
-        for (int i = 0; i < 3; i++)
-            p[i] = (double)e[i];
-    return s;
-}
-
-/* Appends one random line, arc or short dense polyline (0.1-0.5 mm chords of a curve) from p (updated to its end). */
-static void append_one(lsm_planner *pl, uint64_t *st, double p[3])
-{
-    const lsm_planner_move mv = {(lsm_real)test_logu(st, 5, 300), (lsm_real)test_logu(st, 2e-3, 0.1), 0, 0};
-    const double u = test_urand(st);
-    if (u < 0.3) {
-        (void)test_append_random_arc(pl, st, p, 0.1, 30, 4.0,
-                                     &mv); /* (an arc that does not fit is refused: the next item is tried) */
-        return;
-    }
-    double h = test_uni(st, 0, 6.283185307179586);
-    if (u < 0.65) {
-        const double d[3] = {cos(h), sin(h), test_urand(st) < 0.5 ? 0.0 : test_uni(st, -0.5, 0.5)};
-        const double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        const double dn[3] = {d[0] / n, d[1] / n, d[2] / n};
-        (void)append_line(pl, p, dn, test_logu(st, 0.05, 20), &mv);
-        return;
-    }
-    const double turn = test_uni(st, -0.08, 0.08); /* a curve of chords */
-    for (int k = 0; k < 8; k++) {
-        h += turn;
-        const double d[3] = {cos(h), sin(h), 0};
-        (void)append_line(pl, p, d, test_uni(st, 0.1, 0.5), &mv);
-    }
-}
 
 static double fmin1(lsm_real r)
 {
@@ -161,7 +124,7 @@ static void test_shortcuts_exact(void **state)
         assert_int_equal(test_random_planner(&pl, store, CAP, &st, g_seed, prog, 7u, 0.004), LSM_OK);
         double p[3] = {0, 0, 0};
         for (int m = 0; m < 24 && lsm_planner_free(&pl) > 24; m++)
-            append_one(&pl, &st, p);
+            test_append_random_item(&pl, &st, p);
         assert_int_equal(lsm_planner_flush(&pl), LSM_OK);
         ramps_on(&pl, &st, prog, &t);
     }

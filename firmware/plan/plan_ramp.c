@@ -489,21 +489,35 @@ static bool parts_covered(const rcheck *whole, const rcheck *res)
            whole->rj >= lsm_min2(res->rj, R1) * k && whole->rs >= lsm_min2(res->rs, R1) * k;
 }
 
+/* The parts of a phase of n cycles the speed test sees (their ends at the eighths): 8, 4, 2 or 1. */
+static int phase_part_count(uint32_t n)
+{
+    return n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
+}
+
+/* The state at the end of part q (1..Q) of phase ph from st: the phase's end itself at q = Q. */
+static void part_end(const lsm_phase *ph, lsm_real dt, const lsm_kin *st, int q, int Q, lsm_kin *out)
+{
+    if (q == Q) {
+        lsm_phase_end(ph, dt, st, out);
+        return;
+    }
+    const lsm_real T = (lsm_real)ph->n_cycles * dt;
+    const int k8 = q * (8 / Q);
+    phase_at(ph, T, st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], out);
+}
+
 /* The parts of phase ph (from st, Q of them, ends at the eighths) against the blocks they cross: their budgets into
  * res, or with caps_only their speeds alone; the phase's end in *end. True: a speed above a block's cap (res says
  * where; the walk stops there). */
 static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, int Q, lsm_real sn,
                         bool caps_only, rcheck *res, lsm_kin *end)
 {
-    const lsm_real dt = pc->pl->cfg.cycle_s, T = (lsm_real)ph->n_cycles * dt;
+    const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real psn = ph->shape == LSM_PHASE_CONST ? R0 : sn;
     lsm_kin prev = *st, cur;
     for (int q = 1; q <= Q; q++) {
-        const int k8 = q * (8 / Q);
-        if (q == Q)
-            lsm_phase_end(ph, dt, st, &cur);
-        else
-            phase_at(ph, T, st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &cur);
+        part_end(ph, dt, st, q, Q, &cur);
         check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, res);
         if (res->vviol)
             return true;
@@ -535,7 +549,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
         const uint32_t n = ph[p].n_cycles;
         if (n == 0)
             continue;
-        const int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
+        const int Q = phase_part_count(n);
         if (Q > 1) {
             /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
              * end values, and they bound those of every part): where that holds, so do the parts; the finer
@@ -683,10 +697,9 @@ static const lsm_kin *rprof_part_end(rprof *pf, int p, int q, int Q)
         pf->cp = p;
         pf->cq = 0;
     }
-    const lsm_real T = (lsm_real)pf->ph[p].n_cycles * pf->dt;
     while (pf->cq < q) {
-        const int k = ++pf->cq, k8 = k * (8 / Q);
-        phase_at(&pf->ph[p], T, &pf->st[p], T * (lsm_real)k / (lsm_real)Q, k_sin8[k8], k_cos8[k8], &pf->pe[k]);
+        const int k = ++pf->cq;
+        part_end(&pf->ph[p], pf->dt, &pf->st[p], k, Q, &pf->pe[k]);
     }
     return &pf->pe[q];
 }
@@ -699,7 +712,7 @@ static bool rprof_first_above(rprof *pf, lsm_real ceff, lsm_real *s_out)
         const uint32_t n = pf->ph[p].n_cycles;
         if (n == 0 || !(lsm_max2(pf->st[p].v_mm_s, pf->st[p + 1].v_mm_s) > ceff))
             continue;
-        const int Q = n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
+        const int Q = phase_part_count(n);
         const lsm_kin *prev = &pf->st[p];
         for (int q = 1; q <= Q; q++) {
             const lsm_kin *e = rprof_part_end(pf, p, q, Q);

@@ -376,9 +376,10 @@ static double dist_window(const prog *p, int e0, int ne, const double x[3], doub
     double best = INFINITY;
     for (int i = 0; i < ne; i++) {
         const lsm_geom *g = &p->path[e0 + i];
-        dl[i] = has_closed_form(g) ? dist_closed(g, x) : helix_lower_bound(g, x);
         if (has_closed_form(g))
-            best = fmin(best, dl[i]);
+            best = fmin(best, dl[i] = dist_closed(g, x));
+        else
+            dl[i] = helix_lower_bound(g, x);
     }
     for (int i = 0; i < ne; i++) {
         const lsm_geom *g = &p->path[e0 + i];
@@ -721,150 +722,29 @@ static void test_no_prepare(void **state)
     scenario(2, "override (no prepare)", 5);
 }
 
-/* Regression (path soak, double build, seed 22514, "override (no prepare)" case 6): an override change raised the
- * factor of the blocks ahead (a decrease from 95.6 % to 55.8 % set the blocks before its switch to 100 %, the larger
- * factor; an increase to 100 % likewise), and with the higher caps the W of the node where the current piece ends fell
- * below the piece's end speed (W is not monotone in the caps: whole-cycle ramps): from there no piece was found at
- * all, and the machine stood still in RUN at 6.5 mm/s from cycle 438 on. Every override change must leave a verified
- * piece where the machine is committed (planner.h, "Commitment"). The program and schedule of that case, with every
- * piece planned in the cycle; then the increase alone. */
-static const cmd k_freeze_prog[] = {
-    {0,
-     {-0x1.c6e3f75c6befbp-4, -0x1.08ed961af5479p-1, 0x0p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.6dd0813fb0b4cp+2,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.44c254a78e5c1p+2, -0x1.201be466e2ce1p+2, 0x0p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.b2a768bf6da02p+6,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.1a8cb0c2b1567p+2, -0x1.7f77d8772dcc2p+2, -0x1.c01e2b0c1ed73p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.7613bf371807cp+6,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.1a8cb0c2b1567p+2, -0x1.907b3a62afa9bp+2, -0x1.c01e2b0c1ed73p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.d75897be2b5b6p+3,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.a78c3106f642cp+1, -0x1.907b3a62afa9bp+2, -0x1.c01e2b0c1ed73p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.fa7f17a7193a3p+2,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {1,
-     {0x1.4aff22bc86db8p-1, -0x1.00f6f0c6eb0fcp+0, -0x1.c01e2b0c1ed73p+0},
-     {0x1.9ed7763e4b0dap+0, -0x1.e7e5709b75f77p+1, -0x1.c01e2b0c1ed73p+0},
-     17,
-     -1,
-     0x1.4a83e176268dfp+7,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.4aff22bc86db8p-1, -0x1.00f6f0c6eb0fcp+0, 0x1.4daf45f1ca9c1p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.cb17456e15c32p+5,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {0x1.4aff22bc86db8p-1, 0x1.80d023161059ap+0, 0x1.4daf45f1ca9c1p+0},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.b33532b0366fap+7,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {-0x1.cc1b4ee6bf82p-2, 0x1.bf220e88153a7p+1, 0x1.e90a503fe43d8p+1},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.daca008db1b1ep+6,
-     0x1.8b20817cb1c0ep-6,
-     0},
-    {0,
-     {-0x1.0cc76c4b72e5ep+3, -0x1.8d4eca16b056p+2, 0x1.4d0abf822f23ep+2},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.1f1773c4d42b4p+5,
-     0x1.69d44d924faa5p-6,
-     0},
-    {0,
-     {-0x1.7783714945d1cp+4, 0x1.27a76ee48218p+1, 0x1.dc41ce35a3d28p+4},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.a517a95329505p+3,
-     0x1.69d44d924faa5p-6,
-     0},
-    {0,
-     {-0x1.b10fd71043ccdp+4, 0x1.e5bcc12d3aa11p+4, 0x1.dc41ce35a3d28p+4},
-     {0x0p+0, 0x0p+0, 0x0p+0},
-     0,
-     0,
-     0x1.b8faaf34e68f9p+3,
-     0x1.69d44d924faa5p-6,
-     0},
-};
 
-static void run_freeze_case(const long *at, const double *val, int n_ovr, const char *what)
+/* Case `index` of scenario (kind, mode) under seed `seed` (a soak finding): its program and run options. */
+static void draw_replay(unsigned long seed, int kind, int mode, long index, prog *p, run_opts *o)
 {
-    static prog p;
-    memset(&p, 0, sizeof p);
-    p.n = (int)(sizeof k_freeze_prog / sizeof k_freeze_prog[0]);
-    memcpy(p.c, k_freeze_prog, sizeof k_freeze_prog);
-    for (int k = 0; k < p.n; k++)
-        p.max_tol = fmax(p.max_tol, p.c[k].tol);
-    memcpy(p.end, p.c[p.n - 1].end, sizeof p.end);
-    prog_paths(&p);
-    run_opts o;
-    memset(&o, 0, sizeof o);
-    o.capacity = 57;
-    o.hold_at = o.resume_at = -1;
-    o.no_prepare = 1;
-    o.n_ovr = n_ovr;
-    for (int i = 0; i < n_ovr; i++) {
-        o.ovr_at[i] = at[i];
-        o.ovr_val[i] = val[i];
-    }
-    run_res r;
-    run(&p, &o, &r);
-    check_run(&p, &r, what, 0);
-    free(r.q);
+    uint64_t rs = rng_of(seed, kind * 131 + mode);
+    for (long c = 0; c <= index; c++)
+        if (!draw_case(p, o, &rs, kind, mode))
+            assert_true(c < index); /* (the case itself is not empty) */
 }
 
-/* Case `index` of scenario (kind, mode) under seed `seed`, run and checked as the scenario would (a soak finding);
- * the result in *r (r->q to free). */
+/* That case run with options o and checked as the scenario would; the result in *r (r->q to free). */
+static void run_replay(const prog *p, const run_opts *o, long index, const char *what, run_res *r)
+{
+    run(p, o, r);
+    check_run(p, r, what, index);
+}
+
 static void replay_case(unsigned long seed, int kind, int mode, long index, const char *what, run_res *r)
 {
     static prog p;
-    uint64_t rs = rng_of(seed, kind * 131 + mode);
     run_opts o;
-    for (long c = 0; c <= index; c++)
-        if (!draw_case(&p, &o, &rs, kind, mode))
-            assert_true(c < index); /* (the case itself is not empty) */
-    run(&p, &o, r);
-    check_run(&p, r, what, index);
+    draw_replay(seed, kind, mode, index, &p, &o);
+    run_replay(&p, &o, index, what, r);
 }
 
 /* An override change that fits nowhere is undone; the plan restored must be one the machine can follow. A fresh pass
@@ -881,15 +761,31 @@ static void test_override_restore(void **state)
     free(r.q);
 }
 
+/* Regression (path soak, double build, seed 22514, "override (no prepare)" case 6): an override change raised the
+ * factor of the blocks ahead (a decrease from 95.6 % to 55.8 % set the blocks before its switch to 100 %, the larger
+ * factor; an increase to 100 % likewise), and with the higher caps the W of the node where the current piece ends fell
+ * below the piece's end speed (W is not monotone in the caps: whole-cycle ramps): from there no piece was found at
+ * all, and the machine stood still in RUN at 6.5 mm/s from cycle 438 on. Every override change must leave a verified
+ * piece where the machine is committed (planner.h, "Commitment"). The case as drawn (its schedule: 95.6 % at cycle
+ * 93, 55.8 % at 418, 169 % at 1108; every piece planned in the cycle), then with the increase to 100 % alone, one
+ * cycle before the decrease. */
 static void test_override_commitment(void **state)
 {
     (void)state;
-    const long at[3] = {93, 418, 1108};
-    const double val[3] = {0x1.e9ac41f6c2172p-1, 0x1.1deee12f2915p-1, 0x1.b10044df03de2p+0};
-    run_freeze_case(at, val, 3, "override decrease (seed 22514)");
-    const long at_up[3] = {at[0], 417, at[2]}; /* the increase to 100 % alone, one cycle before */
-    const double val_up[3] = {val[0], 1.0, val[2]};
-    run_freeze_case(at_up, val_up, 3, "override increase (seed 22514)");
+    static prog p;
+    run_opts o;
+    run_res r;
+    draw_replay(22514, 2, 5, 6, &p, &o);
+    run_replay(&p, &o, 6, "override decrease (seed 22514)", &r);
+    free(r.q);
+    int k = 0;
+    while (k < o.n_ovr && o.ovr_at[k] != 418)
+        k++;
+    assert_true(k < o.n_ovr);
+    o.ovr_at[k] = 417;
+    o.ovr_val[k] = 1.0;
+    run_replay(&p, &o, 6, "override increase (seed 22514)", &r);
+    free(r.q);
 }
 
 /* Replacements planned 3 cycles ahead of the cruise sample they start at (a background task that needs time). */

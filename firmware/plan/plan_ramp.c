@@ -383,35 +383,66 @@ static void frame_improve(const lsm_planner *pl, const lsm_pblock *b, const kmag
     }
 }
 
-static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *m, rcheck *res)
-{
+/* The block a check last met, with its cap and (once asked) its budget coefficients: consecutive spans of a check
+ * (the parts of a phase, the next phase) mostly lie in the same block, whose values are then read once. They hold
+ * for the whole check (the planner and pc->floor do not change during it). */
+typedef struct blkmemo {
+    uint32_t id;
+    bool valid, have_coef;
+    const lsm_pblock *b;
+    lsm_real cap;
     coef c;
-    coef_get(b, &c);
+} blkmemo;
+
+/* Block id into bm (from the memo when it is the block last met). */
+static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
+{
+    if (bm->valid && bm->id == id)
+        return;
+    bm->id = id;
+    bm->valid = true;
+    bm->have_coef = false;
+    bm->b = blk(pc->pl, id);
+    bm->cap = cap_floor(pc->pl, id, bm->b, pc->floor);
+}
+
+static const coef *blkmemo_coef(blkmemo *bm)
+{
+    if (!bm->have_coef) {
+        coef_get(bm->b, &bm->c);
+        bm->have_coef = true;
+    }
+    return &bm->c;
+}
+
+static void check_block(const lsm_planner *pl, const lsm_pblock *b, const coef *cf, const kmag *m, rcheck *res)
+{
+    const coef *c = cf;
     lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
     bool cross_cut = false; /* rj cut to CROSS_SHARE_TARGET */
-    if (m->amax > R0 && c.aa > R0) {
-        const lsm_real al = (R1 - c.ba * m->v2) / c.aa;
+    if (m->amax > R0 && c->aa > R0) {
+        const lsm_real al = (R1 - c->ba * m->v2) / c->aa;
         ra_acc = al > R0 ? al / m->amax : R0;
     }
-    if (c.aj > R0) {
-        const lsm_real room = R1 - c.gj * m->v3;
-        const lsm_real cross = LSM_R(3.0) * c.bj * m->v * m->amax;
+    if (c->aj > R0) {
+        const lsm_real room = R1 - c->gj * m->v3;
+        const lsm_real cross = LSM_R(3.0) * c->bj * m->v * m->amax;
         if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
             ra_cross = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
             rj = CROSS_SHARE_TARGET;
             cross_cut = true;
         } else if (m->jmax > R0) {
-            rj = (room - cross) / c.aj / m->jmax;
+            rj = (room - cross) / c->aj / m->jmax;
         }
     }
     if ((ra_acc < R1 || ra_cross < R1 || rj < R1) && b->g.kind == LSM_GEOM_CLOTHOID)
-        frame_improve(pl, b, m, &c, res, &ra_acc, &ra_cross, &rj);
+        frame_improve(pl, b, m, c, res, &ra_acc, &ra_cross, &rj);
     if (cross_cut && rj < R1)
         res->cut = 1;
     res->ra = lsm_min2(res->ra, lsm_min2(ra_acc, ra_cross));
     res->rj = lsm_min2(res->rj, rj);
-    if (m->sn > R0 && c.as > R0) {
-        const lsm_real r = (R1 / c.as) / m->sn;
+    if (m->sn > R0 && c->as > R0) {
+        const lsm_real r = (R1 / c->as) / m->sn;
         if (r < res->rs)
             res->rs = r;
     }
@@ -420,7 +451,7 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
 /* One sub-interval [xa, xb] (either order) against the blocks it touches: their caps, and unless caps_only their
  * budgets. */
 static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, const lsm_kin *q, lsm_real sn,
-                       bool caps_only, rcheck *res)
+                       bool caps_only, blkmemo *bm, rcheck *res)
 {
     kmag km;
     kmag_of(p, q, sn, &km);
@@ -435,8 +466,9 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
     uint32_t id = pc->cid;
     lsm_real x = pc->cx;
     for (;;) {
-        const lsm_pblock *b = blk(pl, id);
-        const lsm_real cap = cap_floor(pl, id, b, pc->floor);
+        blkmemo_at(pc, id, bm);
+        const lsm_pblock *b = bm->b;
+        const lsm_real cap = bm->cap;
         if (m->v > cap * (R1 + CAP_SLACK)) {
             if (!res->vviol) {
                 res->vviol = 1;
@@ -447,7 +479,7 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
             return;
         }
         if (!caps_only)
-            check_block(pl, b, m, res);
+            check_block(pl, b, blkmemo_coef(bm), m, res);
         x += b->g.len;
         id++;
         if (!(x < xb) || id == pc->id_end)
@@ -462,7 +494,8 @@ void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, 
     lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
     rcheck res;
     rcheck_init(&res);
-    check_span(&pc, R0, R0, lo, hi, R0, false, &res);
+    blkmemo bm = {0};
+    check_span(&pc, R0, R0, lo, hi, R0, false, &bm, &res);
     *ra = res.vviol ? R0 : res.ra;
     *rj = res.vviol ? R0 : res.rj;
 }
@@ -511,14 +544,14 @@ static void part_end(const lsm_phase *ph, lsm_real dt, const lsm_kin *st, int q,
  * res, or with caps_only their speeds alone; the phase's end in *end. True: a speed above a block's cap (res says
  * where; the walk stops there). */
 static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, int Q, lsm_real sn,
-                        bool caps_only, rcheck *res, lsm_kin *end)
+                        bool caps_only, blkmemo *bm, rcheck *res, lsm_kin *end)
 {
     const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real psn = ph->shape == LSM_PHASE_CONST ? R0 : sn;
     lsm_kin prev = *st, cur;
     for (int q = 1; q <= Q; q++) {
         part_end(ph, dt, st, q, Q, &cur);
-        check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, res);
+        check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, bm, res);
         if (res->vviol)
             return true;
         prev = cur;
@@ -541,8 +574,10 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
     lsm_scurve_phases(&r->iv, r->jp, ph);
     lsm_kin st = {R0, r->v0, R0, R0};
     const lsm_real sn = ramp_speak(r, dt);
+    blkmemo bm;
+    bm.valid = false;
     if (lsm_scurve_total_cycles(&r->iv) == 0) {
-        check_span(pc, x_s, x_s, &st, &st, R0, false, res);
+        check_span(pc, x_s, x_s, &st, &st, R0, false, &bm, res);
         return;
     }
     for (int p = 0; p < 7; p++) {
@@ -559,7 +594,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
             rcheck whole;
             rcheck_init(&whole);
             check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false,
-                       &whole);
+                       &bm, &whole);
             if (!rcheck_fails(res) && rcheck_ok(&whole)) {
                 res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
                 res->rj = lsm_min2(res->rj, whole.rj);
@@ -573,7 +608,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
                 const uint32_t cid = pc->cid; /* (the cursor, to walk the parts again from where the walk was) */
                 const lsm_real cx = pc->cx;
                 lsm_kin pe;
-                if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, true, res, &pe))
+                if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, true, &bm, res, &pe))
                     return;
                 if (!whole.vviol) {
                     st = pe;
@@ -583,7 +618,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
                 pc->cx = cx;
             }
         }
-        if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, false, res, &st))
+        if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, false, &bm, res, &st))
             return;
     }
 }

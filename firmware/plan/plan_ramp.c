@@ -171,26 +171,45 @@ static const lsm_real k_cos8[9] =
      LSM_R(0.0), LSM_R(-0.38268343236508977), LSM_R(-0.70710678118654752), LSM_R(-0.92387953251128676),
      LSM_R(-1.0)};
 
-/* State after tau into a phase of length T, given sin and cos of phi = pi tau / T (sin² phases). */
-static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi,
-                     lsm_kin *out)
+/* What the state of a phase at a time tau into it (phase_at) needs beyond tau: its length T, and for sin² phases the
+ * sign of its shape and the denominators 4 w, 8 w², 16 w³ (w = pi / (2 T)), computed once per phase (the same
+ * expressions on the same inputs as per part: the same values). */
+typedef struct phase_form {
+    const lsm_phase *ph;
+    lsm_real T, sg, d1, d2, d3;
+} phase_form;
+
+static void phase_form_of(const lsm_phase *ph, lsm_real dt, phase_form *f)
+{
+    f->ph = ph;
+    f->T = (lsm_real)ph->n_cycles * dt;
+    if (ph->shape == LSM_PHASE_CONST)
+        return;
+    const lsm_real w = PI_R / (LSM_R(2.0) * f->T);
+    f->sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+    f->d1 = LSM_R(4.0) * w;
+    f->d2 = LSM_R(8.0) * w * w;
+    f->d3 = LSM_R(16.0) * w * w * w;
+}
+
+/* State after tau into the phase f, given sin and cos of phi = pi tau / T (sin² phases). */
+static void phase_at(const phase_form *f, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi, lsm_kin *out)
 {
     lsm_real u0, u1, u2, u3;
     const lsm_real t = tau;
-    if (ph->shape == LSM_PHASE_CONST) {
+    if (f->ph->shape == LSM_PHASE_CONST) {
         u0 = R1;
         u1 = t;
         u2 = t * t / LSM_R(2.0);
         u3 = t * t * t / LSM_R(6.0);
     } else {
-        const lsm_real w = PI_R / (LSM_R(2.0) * T);
-        const lsm_real sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+        const lsm_real sg = f->sg;
         u0 = (R1 - sg * cphi) / LSM_R(2.0);
-        u1 = t / LSM_R(2.0) - sg * sphi / (LSM_R(4.0) * w);
-        u2 = t * t / LSM_R(4.0) - sg * (R1 - cphi) / (LSM_R(8.0) * w * w);
-        u3 = t * t * t / LSM_R(12.0) - sg * t / (LSM_R(8.0) * w * w) + sg * sphi / (LSM_R(16.0) * w * w * w);
+        u1 = t / LSM_R(2.0) - sg * sphi / f->d1;
+        u2 = t * t / LSM_R(4.0) - sg * (R1 - cphi) / f->d2;
+        u3 = t * t * t / LSM_R(12.0) - sg * t / f->d2 + sg * sphi / f->d3;
     }
-    const lsm_real jk = ph->jerk_mm_s3;
+    const lsm_real jk = f->ph->jerk_mm_s3;
     const lsm_kin a = *s0;
     out->j_mm_s3 = jk * u0;
     out->a_mm_s2 = a.a_mm_s2 + jk * u1;
@@ -528,35 +547,33 @@ static int phase_part_count(uint32_t n)
     return n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
 }
 
-/* The state at the end of part q (1..Q) of phase ph from st: the phase's end itself at q = Q. */
-static void part_end(const lsm_phase *ph, lsm_real dt, const lsm_kin *st, int q, int Q, lsm_kin *out)
+/* The state at the end of part q (1..Q - 1) of phase f from st (the phase's end itself is lsm_phase_end's). */
+static void part_end(const phase_form *f, const lsm_kin *st, int q, int Q, lsm_kin *out)
 {
-    if (q == Q) {
-        lsm_phase_end(ph, dt, st, out);
-        return;
-    }
-    const lsm_real T = (lsm_real)ph->n_cycles * dt;
     const int k8 = q * (8 / Q);
-    phase_at(ph, T, st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], out);
+    phase_at(f, st, f->T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], out);
 }
 
-/* The parts of phase ph (from st, Q of them, ends at the eighths) against the blocks they cross: their budgets into
- * res, or with caps_only their speeds alone; the phase's end in *end. True: a speed above a block's cap (res says
- * where; the walk stops there). */
-static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, int Q, lsm_real sn,
-                        bool caps_only, blkmemo *bm, rcheck *res, lsm_kin *end)
+/* The parts of phase ph (from st to its end e, Q of them, ends at the eighths) against the blocks they cross: their
+ * budgets into res, or with caps_only their speeds alone. True: a speed above a block's cap (res says where; the walk
+ * stops there). */
+static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, const lsm_kin *e, int Q,
+                        lsm_real sn, bool caps_only, blkmemo *bm, rcheck *res)
 {
-    const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real psn = ph->shape == LSM_PHASE_CONST ? R0 : sn;
+    phase_form f;
+    phase_form_of(ph, pc->pl->cfg.cycle_s, &f);
     lsm_kin prev = *st, cur;
     for (int q = 1; q <= Q; q++) {
-        part_end(ph, dt, st, q, Q, &cur);
+        if (q < Q)
+            part_end(&f, st, q, Q, &cur);
+        else
+            cur = *e;
         check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, bm, res);
         if (res->vviol)
             return true;
         prev = cur;
     }
-    *end = cur;
     return false;
 }
 
@@ -585,12 +602,12 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
         if (n == 0)
             continue;
         const int Q = phase_part_count(n);
+        lsm_kin e; /* the phase's end (its last part's end too) */
+        lsm_phase_end(&ph[p], dt, &st, &e);
         if (Q > 1) {
             /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
              * end values, and they bound those of every part): where that holds, so do the parts; the finer
              * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
-            lsm_kin e;
-            lsm_phase_end(&ph[p], dt, &st, &e);
             rcheck whole;
             rcheck_init(&whole);
             check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false,
@@ -607,19 +624,19 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
             if (quick && (whole.vviol || parts_covered(&whole, res))) {
                 const uint32_t cid = pc->cid; /* (the cursor, to walk the parts again from where the walk was) */
                 const lsm_real cx = pc->cx;
-                lsm_kin pe;
-                if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, true, &bm, res, &pe))
+                if (phase_parts(pc, &ph[p], x_s, &st, &e, Q, sn, true, &bm, res))
                     return;
                 if (!whole.vviol) {
-                    st = pe;
+                    st = e;
                     continue;
                 }
                 pc->cid = cid; /* no part exceeds a cap, by rounding: their budgets below */
                 pc->cx = cx;
             }
         }
-        if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, false, &bm, res, &st))
+        if (phase_parts(pc, &ph[p], x_s, &st, &e, Q, sn, false, &bm, res))
             return;
+        st = e;
     }
 }
 
@@ -703,7 +720,8 @@ typedef struct rprof {
     lsm_real dt;
     lsm_phase ph[7];
     lsm_kin st[8]; /* st[p]: start of phase p; st[7]: the ramp's end */
-    int cp, cq;    /* the phase whose parts' ends pe[1..cq] are known (-1: none) */
+    int cp, cq;    /* the phase whose parts' ends pe[1..cq] are known (-1: none), and its closed form */
+    phase_form form;
     lsm_kin pe[8];
 } rprof;
 
@@ -731,10 +749,11 @@ static const lsm_kin *rprof_part_end(rprof *pf, int p, int q, int Q)
     if (pf->cp != p) {
         pf->cp = p;
         pf->cq = 0;
+        phase_form_of(&pf->ph[p], pf->dt, &pf->form);
     }
     while (pf->cq < q) {
         const int k = ++pf->cq;
-        part_end(&pf->ph[p], pf->dt, &pf->st[p], k, Q, &pf->pe[k]);
+        part_end(&pf->form, &pf->st[p], k, Q, &pf->pe[k]);
     }
     return &pf->pe[q];
 }

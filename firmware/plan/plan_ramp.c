@@ -425,6 +425,13 @@ static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
     bm->cap = cap_floor(pc->pl, id, bm->b, pc->floor);
 }
 
+/* Is x in the cursor's block, which the memo holds? Then lsm_pl_seek(pc, x) would not move the cursor (the same
+ * two tests on the same values). */
+static bool blkmemo_holds_cursor(const pctx *pc, const blkmemo *bm, lsm_real x)
+{
+    return bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
+}
+
 static const coef *blkmemo_coef(blkmemo *bm)
 {
     if (!bm->have_coef) {
@@ -481,7 +488,8 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
         xa = xb;
         xb = t;
     }
-    lsm_pl_seek(pc, xa);
+    if (!blkmemo_holds_cursor(pc, bm, xa))
+        lsm_pl_seek(pc, xa);
     uint32_t id = pc->cid;
     lsm_real x = pc->cx;
     for (;;) {

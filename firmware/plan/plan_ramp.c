@@ -407,6 +407,7 @@ static void frame_improve(const lsm_planner *pl, const lsm_pblock *b, const kmag
  * for the whole check (the planner and pc->floor do not change during it). */
 typedef struct blkmemo {
     uint32_t id;
+    bool on; /* off: every span reads its blocks afresh and seeks (the full walk, the tests' reference) */
     bool valid, have_coef;
     const lsm_pblock *b;
     lsm_real cap;
@@ -416,7 +417,7 @@ typedef struct blkmemo {
 /* Block id into bm (from the memo when it is the block last met). */
 static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
 {
-    if (bm->valid && bm->id == id)
+    if (bm->on && bm->valid && bm->id == id)
         return;
     bm->id = id;
     bm->valid = true;
@@ -429,7 +430,7 @@ static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
  * two tests on the same values). */
 static bool blkmemo_holds_cursor(const pctx *pc, const blkmemo *bm, lsm_real x)
 {
-    return bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
+    return bm->on && bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
 }
 
 static const coef *blkmemo_coef(blkmemo *bm)
@@ -521,7 +522,7 @@ void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, 
     lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
     rcheck res;
     rcheck_init(&res);
-    blkmemo bm = {0};
+    blkmemo bm = {0}; /* (off: one block) */
     check_span(&pc, R0, R0, lo, hi, R0, false, &bm, &res);
     *ra = res.vviol ? R0 : res.ra;
     *rj = res.vviol ? R0 : res.rj;
@@ -586,7 +587,8 @@ static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_k
 }
 
 /* Verifies a ramp placed at x_s (its start). The shortcuts (quick; off only in the tests' reference walk,
- * lsm_pl_ramp_verify) leave what the caller uses as the full walk has it: the verdict; the speed test's record; the
+ * lsm_pl_ramp_verify: there every span also reads its blocks afresh and seeks, blkmemo off) leave what the caller
+ * uses as the full walk has it: the verdict; the speed test's record; the
  * ratios of a passing ramp; those below 1 of a failing one (its rescale takes no other); and the position cursor
  * (its path: pc->cx adds up the block lengths it passes, so its rounding depends on the blocks it moved over). */
 static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck *res)
@@ -600,6 +602,7 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
     lsm_kin st = {R0, r->v0, R0, R0};
     const lsm_real sn = ramp_speak(r, dt);
     blkmemo bm;
+    bm.on = quick;
     bm.valid = false;
     if (lsm_scurve_total_cycles(&r->iv) == 0) {
         check_span(pc, x_s, x_s, &st, &st, R0, false, &bm, res);

@@ -417,7 +417,7 @@ typedef struct blkmemo {
 /* Block id into bm (from the memo when it is the block last met). */
 static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
 {
-    if (bm->on && bm->valid && bm->id == id)
+    if (bm->valid && bm->id == id)
         return;
     bm->id = id;
     bm->valid = true;
@@ -430,7 +430,7 @@ static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
  * two tests on the same values). */
 static bool blkmemo_holds_cursor(const pctx *pc, const blkmemo *bm, lsm_real x)
 {
-    return bm->on && bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
+    return bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
 }
 
 static const coef *blkmemo_coef(blkmemo *bm)
@@ -489,6 +489,8 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
         xa = xb;
         xb = t;
     }
+    if (!bm->on)
+        bm->valid = false; /* (the full walk: afresh) */
     if (!blkmemo_holds_cursor(pc, bm, xa))
         lsm_pl_seek(pc, xa);
     uint32_t id = pc->cid;

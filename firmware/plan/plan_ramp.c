@@ -442,9 +442,8 @@ static const coef *blkmemo_coef(blkmemo *bm)
     return &bm->c;
 }
 
-static void check_block(const lsm_planner *pl, const lsm_pblock *b, const coef *cf, const kmag *m, rcheck *res)
+static void check_block(const lsm_planner *pl, const lsm_pblock *b, const coef *c, const kmag *m, rcheck *res)
 {
-    const coef *c = cf;
     lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
     bool cross_cut = false; /* rj cut to CROSS_SHARE_TARGET */
     if (m->amax > R0 && c->aa > R0) {
@@ -524,7 +523,7 @@ void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, 
     lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
     rcheck res;
     rcheck_init(&res);
-    blkmemo bm = {0}; /* (off: one block) */
+    blkmemo bm = {0}; /* (off: one span) */
     check_span(&pc, R0, R0, lo, hi, R0, false, &bm, &res);
     *ra = res.vviol ? R0 : res.ra;
     *rj = res.vviol ? R0 : res.rj;
@@ -590,9 +589,9 @@ static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_k
 
 /* Verifies a ramp placed at x_s (its start). The shortcuts (quick; off only in the tests' reference walk,
  * lsm_pl_ramp_verify: there every span also reads its blocks afresh and seeks, blkmemo off) leave what the caller
- * uses as the full walk has it: the verdict; the speed test's record; the
- * ratios of a passing ramp; those below 1 of a failing one (its rescale takes no other); and the position cursor
- * (its path: pc->cx adds up the block lengths it passes, so its rounding depends on the blocks it moved over). */
+ * uses as the full walk has it: the verdict; the speed test's record; the ratios of a passing ramp; those below 1 of
+ * a failing one (its rescale takes no other); and the position cursor (its path: pc->cx adds up the block lengths
+ * it passes, so its rounding depends on the blocks it moved over). */
 static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck *res)
 {
     lsm_planner *pl = (lsm_planner *)pc->pl; /* statistics only */
@@ -623,8 +622,8 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
              * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
             rcheck whole;
             rcheck_init(&whole);
-            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false,
-                       &bm, &whole);
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false, &bm,
+                       &whole);
             if (!rcheck_fails(res) && rcheck_ok(&whole)) {
                 res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
                 res->rj = lsm_min2(res->rj, whole.rj);

@@ -254,14 +254,6 @@ static lsm_real time_to(const plan5 *p, lsm_real dt, lsm_real x)
     return t;
 }
 
-/*
- * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
- * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
- * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
- * (a = 0 there, lsm_piece.step), a second one up to the same cruise. For a few lower cruises (geometric levels
- * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
- * (or the end of the first plan's ramp) sooner than the single ramp.
- */
 /* Time of the whole piece p of length D. */
 static lsm_real plan_time(const plan5 *p, lsm_real dt, lsm_real D)
 {
@@ -428,17 +420,11 @@ static void try_step(pctx *pc, const ramp_tops *tops, const plan5 *best, lsm_rea
  * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
  * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
  * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
- * (a = 0 there, lsm_piece.step), a second one up to the same cruise. For a few lower cruises (geometric levels
- * from the top), the second ramp is planned too, and the staircase is taken when it reaches the highest cruise
- * (or the end of the first plan's ramp) sooner than the single ramp.
- */
-/*
- * One sin² ramp from v0 to the highest cruise must fit every block it crosses: where it starts in a slow,
- * curved stretch (out of a valley), that stretch lowers its acceleration and jerk for the whole ramp, or delays
- * its start (a lead cruise at v0). A staircase may be faster: a lower ramp first, then, re-planned at its end
  * (a = 0 there, lsm_piece.step), a second one up to the same cruise. Levels tried: geometric levels from the top,
  * and, where best has a lead cruise at v0, the caps that stretch allows (its suffix minima: a plateau between a
- * slow start and a fast end, which the geometric levels miss when it lies far below the top, ran at v0).
+ * slow start and a fast end, which the geometric levels miss when it lies far below the top, ran at v0). For each
+ * level the second ramp is planned too (try_step), and the staircase is taken when it reaches the highest cruise
+ * (or the end of the first plan's ramp; from a cap level, the end of the piece) sooner than the single ramp.
  */
 static void staircase(pctx *pc, plan5 *best)
 {

@@ -171,26 +171,45 @@ static const lsm_real k_cos8[9] =
      LSM_R(0.0), LSM_R(-0.38268343236508977), LSM_R(-0.70710678118654752), LSM_R(-0.92387953251128676),
      LSM_R(-1.0)};
 
-/* State after tau into a phase of length T, given sin and cos of phi = pi tau / T (sin² phases). */
-static void phase_at(const lsm_phase *ph, lsm_real T, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi,
-                     lsm_kin *out)
+/* What the state of a phase at a time tau into it (phase_at) needs beyond tau: its length T, and for sin² phases the
+ * sign of its shape and the denominators 4 w, 8 w², 16 w³ (w = pi / (2 T)), computed once per phase (the same
+ * expressions on the same inputs as per part: the same values). */
+typedef struct phase_form {
+    const lsm_phase *ph;
+    lsm_real T, sg, d1, d2, d3;
+} phase_form;
+
+static void phase_form_of(const lsm_phase *ph, lsm_real dt, phase_form *f)
+{
+    f->ph = ph;
+    f->T = (lsm_real)ph->n_cycles * dt;
+    if (ph->shape == LSM_PHASE_CONST)
+        return;
+    const lsm_real w = PI_R / (LSM_R(2.0) * f->T);
+    f->sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+    f->d1 = LSM_R(4.0) * w;
+    f->d2 = LSM_R(8.0) * w * w;
+    f->d3 = LSM_R(16.0) * w * w * w;
+}
+
+/* State after tau into the phase f, given sin and cos of phi = pi tau / T (sin² phases). */
+static void phase_at(const phase_form *f, const lsm_kin *s0, lsm_real tau, lsm_real sphi, lsm_real cphi, lsm_kin *out)
 {
     lsm_real u0, u1, u2, u3;
     const lsm_real t = tau;
-    if (ph->shape == LSM_PHASE_CONST) {
+    if (f->ph->shape == LSM_PHASE_CONST) {
         u0 = R1;
         u1 = t;
         u2 = t * t / LSM_R(2.0);
         u3 = t * t * t / LSM_R(6.0);
     } else {
-        const lsm_real w = PI_R / (LSM_R(2.0) * T);
-        const lsm_real sg = ph->shape == LSM_PHASE_RISE ? R1 : -R1;
+        const lsm_real sg = f->sg;
         u0 = (R1 - sg * cphi) / LSM_R(2.0);
-        u1 = t / LSM_R(2.0) - sg * sphi / (LSM_R(4.0) * w);
-        u2 = t * t / LSM_R(4.0) - sg * (R1 - cphi) / (LSM_R(8.0) * w * w);
-        u3 = t * t * t / LSM_R(12.0) - sg * t / (LSM_R(8.0) * w * w) + sg * sphi / (LSM_R(16.0) * w * w * w);
+        u1 = t / LSM_R(2.0) - sg * sphi / f->d1;
+        u2 = t * t / LSM_R(4.0) - sg * (R1 - cphi) / f->d2;
+        u3 = t * t * t / LSM_R(12.0) - sg * t / f->d2 + sg * sphi / f->d3;
     }
-    const lsm_real jk = ph->jerk_mm_s3;
+    const lsm_real jk = f->ph->jerk_mm_s3;
     const lsm_kin a = *s0;
     out->j_mm_s3 = jk * u0;
     out->a_mm_s2 = a.a_mm_s2 + jk * u1;
@@ -383,35 +402,73 @@ static void frame_improve(const lsm_planner *pl, const lsm_pblock *b, const kmag
     }
 }
 
-static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *m, rcheck *res)
-{
+/* The block a check last met, with its cap and (once asked) its budget coefficients: consecutive spans of a check
+ * (the parts of a phase, the next phase) mostly lie in the same block, whose values are then read once. They hold
+ * for the whole check (the planner and pc->floor do not change during it). */
+typedef struct blkmemo {
+    uint32_t id;
+    bool on; /* off: every span reads its blocks afresh and seeks (the full walk, the tests' reference) */
+    bool valid, have_coef;
+    const lsm_pblock *b;
+    lsm_real cap;
     coef c;
-    coef_get(b, &c);
+} blkmemo;
+
+/* Block id into bm (from the memo when it is the block last met). */
+static void blkmemo_at(const pctx *pc, uint32_t id, blkmemo *bm)
+{
+    if (bm->valid && bm->id == id)
+        return;
+    bm->id = id;
+    bm->valid = true;
+    bm->have_coef = false;
+    bm->b = blk(pc->pl, id);
+    bm->cap = cap_floor(pc->pl, id, bm->b, pc->floor);
+}
+
+/* Is x in the cursor's block, which the memo holds? Then lsm_pl_seek(pc, x) would not move the cursor (the same
+ * two tests on the same values). */
+static bool blkmemo_holds_cursor(const pctx *pc, const blkmemo *bm, lsm_real x)
+{
+    return bm->valid && bm->id == pc->cid && !(x < pc->cx) && x < pc->cx + bm->b->g.len;
+}
+
+static const coef *blkmemo_coef(blkmemo *bm)
+{
+    if (!bm->have_coef) {
+        coef_get(bm->b, &bm->c);
+        bm->have_coef = true;
+    }
+    return &bm->c;
+}
+
+static void check_block(const lsm_planner *pl, const lsm_pblock *b, const coef *c, const kmag *m, rcheck *res)
+{
     lsm_real ra_acc = LSM_REAL_MAX, ra_cross = LSM_REAL_MAX, rj = LSM_REAL_MAX;
     bool cross_cut = false; /* rj cut to CROSS_SHARE_TARGET */
-    if (m->amax > R0 && c.aa > R0) {
-        const lsm_real al = (R1 - c.ba * m->v2) / c.aa;
+    if (m->amax > R0 && c->aa > R0) {
+        const lsm_real al = (R1 - c->ba * m->v2) / c->aa;
         ra_acc = al > R0 ? al / m->amax : R0;
     }
-    if (c.aj > R0) {
-        const lsm_real room = R1 - c.gj * m->v3;
-        const lsm_real cross = LSM_R(3.0) * c.bj * m->v * m->amax;
+    if (c->aj > R0) {
+        const lsm_real room = R1 - c->gj * m->v3;
+        const lsm_real cross = LSM_R(3.0) * c->bj * m->v * m->amax;
         if (cross > CROSS_SHARE_MAX * room) { /* the acceleration eats the jerk budget: lower the acceleration */
             ra_cross = (cross > R0 && room > R0) ? CROSS_SHARE_TARGET * room / cross : R0;
             rj = CROSS_SHARE_TARGET;
             cross_cut = true;
         } else if (m->jmax > R0) {
-            rj = (room - cross) / c.aj / m->jmax;
+            rj = (room - cross) / c->aj / m->jmax;
         }
     }
     if ((ra_acc < R1 || ra_cross < R1 || rj < R1) && b->g.kind == LSM_GEOM_CLOTHOID)
-        frame_improve(pl, b, m, &c, res, &ra_acc, &ra_cross, &rj);
+        frame_improve(pl, b, m, c, res, &ra_acc, &ra_cross, &rj);
     if (cross_cut && rj < R1)
         res->cut = 1;
     res->ra = lsm_min2(res->ra, lsm_min2(ra_acc, ra_cross));
     res->rj = lsm_min2(res->rj, rj);
-    if (m->sn > R0 && c.as > R0) {
-        const lsm_real r = (R1 / c.as) / m->sn;
+    if (m->sn > R0 && c->as > R0) {
+        const lsm_real r = (R1 / c->as) / m->sn;
         if (r < res->rs)
             res->rs = r;
     }
@@ -420,7 +477,7 @@ static void check_block(const lsm_planner *pl, const lsm_pblock *b, const kmag *
 /* One sub-interval [xa, xb] (either order) against the blocks it touches: their caps, and unless caps_only their
  * budgets. */
 static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, const lsm_kin *q, lsm_real sn,
-                       bool caps_only, rcheck *res)
+                       bool caps_only, blkmemo *bm, rcheck *res)
 {
     kmag km;
     kmag_of(p, q, sn, &km);
@@ -431,12 +488,16 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
         xa = xb;
         xb = t;
     }
-    lsm_pl_seek(pc, xa);
+    if (!bm->on)
+        bm->valid = false; /* (the full walk: afresh) */
+    if (!blkmemo_holds_cursor(pc, bm, xa))
+        lsm_pl_seek(pc, xa);
     uint32_t id = pc->cid;
     lsm_real x = pc->cx;
     for (;;) {
-        const lsm_pblock *b = blk(pl, id);
-        const lsm_real cap = cap_floor(pl, id, b, pc->floor);
+        blkmemo_at(pc, id, bm);
+        const lsm_pblock *b = bm->b;
+        const lsm_real cap = bm->cap;
         if (m->v > cap * (R1 + CAP_SLACK)) {
             if (!res->vviol) {
                 res->vviol = 1;
@@ -447,7 +508,7 @@ static void check_span(pctx *pc, lsm_real xa, lsm_real xb, const lsm_kin *p, con
             return;
         }
         if (!caps_only)
-            check_block(pl, b, m, res);
+            check_block(pl, b, blkmemo_coef(bm), m, res);
         x += b->g.len;
         id++;
         if (!(x < xb) || id == pc->id_end)
@@ -462,7 +523,8 @@ void lsm_pl_block_ratios(const lsm_planner *pl, uint32_t id, const lsm_kin *lo, 
     lsm_pl_pctx_init(&pc, pl, id, R0, id + 1u);
     rcheck res;
     rcheck_init(&res);
-    check_span(&pc, R0, R0, lo, hi, R0, false, &res);
+    blkmemo bm = {0}; /* (off: one span) */
+    check_span(&pc, R0, R0, lo, hi, R0, false, &bm, &res);
     *ra = res.vviol ? R0 : res.ra;
     *rj = res.vviol ? R0 : res.rj;
 }
@@ -495,42 +557,41 @@ static int phase_part_count(uint32_t n)
     return n >= 8u ? 8 : n >= 4u ? 4 : n >= 2u ? 2 : 1;
 }
 
-/* The state at the end of part q (1..Q) of phase ph from st: the phase's end itself at q = Q. */
-static void part_end(const lsm_phase *ph, lsm_real dt, const lsm_kin *st, int q, int Q, lsm_kin *out)
+/* The state at the end of part q (1..Q - 1) of phase f from st (the phase's end itself is lsm_phase_end's). */
+static void part_end(const phase_form *f, const lsm_kin *st, int q, int Q, lsm_kin *out)
 {
-    if (q == Q) {
-        lsm_phase_end(ph, dt, st, out);
-        return;
-    }
-    const lsm_real T = (lsm_real)ph->n_cycles * dt;
     const int k8 = q * (8 / Q);
-    phase_at(ph, T, st, T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], out);
+    phase_at(f, st, f->T * (lsm_real)q / (lsm_real)Q, k_sin8[k8], k_cos8[k8], out);
 }
 
-/* The parts of phase ph (from st, Q of them, ends at the eighths) against the blocks they cross: their budgets into
- * res, or with caps_only their speeds alone; the phase's end in *end. True: a speed above a block's cap (res says
- * where; the walk stops there). */
-static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, int Q, lsm_real sn,
-                        bool caps_only, rcheck *res, lsm_kin *end)
+/* The parts of phase ph (from st to its end e, Q of them, ends at the eighths) against the blocks they cross: their
+ * budgets into res, or with caps_only their speeds alone. True: a speed above a block's cap (res says where; the walk
+ * stops there). */
+static bool phase_parts(pctx *pc, const lsm_phase *ph, lsm_real x_s, const lsm_kin *st, const lsm_kin *e, int Q,
+                        lsm_real sn, bool caps_only, blkmemo *bm, rcheck *res)
 {
-    const lsm_real dt = pc->pl->cfg.cycle_s;
     const lsm_real psn = ph->shape == LSM_PHASE_CONST ? R0 : sn;
+    phase_form f;
+    phase_form_of(ph, pc->pl->cfg.cycle_s, &f);
     lsm_kin prev = *st, cur;
     for (int q = 1; q <= Q; q++) {
-        part_end(ph, dt, st, q, Q, &cur);
-        check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, res);
+        if (q < Q)
+            part_end(&f, st, q, Q, &cur);
+        else
+            cur = *e;
+        check_span(pc, x_s + prev.s_mm, x_s + cur.s_mm, &prev, &cur, psn, caps_only, bm, res);
         if (res->vviol)
             return true;
         prev = cur;
     }
-    *end = cur;
     return false;
 }
 
 /* Verifies a ramp placed at x_s (its start). The shortcuts (quick; off only in the tests' reference walk,
- * lsm_pl_ramp_verify) leave what the caller uses as the full walk has it: the verdict; the speed test's record; the
- * ratios of a passing ramp; those below 1 of a failing one (its rescale takes no other); and the position cursor
- * (its path: pc->cx adds up the block lengths it passes, so its rounding depends on the blocks it moved over). */
+ * lsm_pl_ramp_verify: there every span also reads its blocks afresh and seeks, blkmemo off) leave what the caller
+ * uses as the full walk has it: the verdict; the speed test's record; the ratios of a passing ramp; those below 1 of
+ * a failing one (its rescale takes no other); and the position cursor (its path: pc->cx adds up the block lengths
+ * it passes, so its rounding depends on the blocks it moved over). */
 static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck *res)
 {
     lsm_planner *pl = (lsm_planner *)pc->pl; /* statistics only */
@@ -541,8 +602,11 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
     lsm_scurve_phases(&r->iv, r->jp, ph);
     lsm_kin st = {R0, r->v0, R0, R0};
     const lsm_real sn = ramp_speak(r, dt);
+    blkmemo bm;
+    bm.on = quick;
+    bm.valid = false;
     if (lsm_scurve_total_cycles(&r->iv) == 0) {
-        check_span(pc, x_s, x_s, &st, &st, R0, false, res);
+        check_span(pc, x_s, x_s, &st, &st, R0, false, &bm, res);
         return;
     }
     for (int p = 0; p < 7; p++) {
@@ -550,15 +614,15 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
         if (n == 0)
             continue;
         const int Q = phase_part_count(n);
+        lsm_kin e; /* the phase's end (its last part's end too) */
+        lsm_phase_end(&ph[p], dt, &st, &e);
         if (Q > 1) {
             /* the whole phase as one span first (v, |a| and |j| are monotone in a phase: their extremes are the
              * end values, and they bound those of every part): where that holds, so do the parts; the finer
              * sub-intervals are only needed where the budgets fall with the speed (curved blocks) */
-            lsm_kin e;
-            lsm_phase_end(&ph[p], dt, &st, &e);
             rcheck whole;
             rcheck_init(&whole);
-            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false,
+            check_span(pc, x_s + st.s_mm, x_s + e.s_mm, &st, &e, ph[p].shape == LSM_PHASE_CONST ? R0 : sn, false, &bm,
                        &whole);
             if (!rcheck_fails(res) && rcheck_ok(&whole)) {
                 res->ra = lsm_min2(res->ra, whole.ra); /* (ratios of the coarser check: a lower bound of the finer) */
@@ -572,19 +636,19 @@ static void ramp_check(pctx *pc, const ramp *r, lsm_real x_s, bool quick, rcheck
             if (quick && (whole.vviol || parts_covered(&whole, res))) {
                 const uint32_t cid = pc->cid; /* (the cursor, to walk the parts again from where the walk was) */
                 const lsm_real cx = pc->cx;
-                lsm_kin pe;
-                if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, true, res, &pe))
+                if (phase_parts(pc, &ph[p], x_s, &st, &e, Q, sn, true, &bm, res))
                     return;
                 if (!whole.vviol) {
-                    st = pe;
+                    st = e;
                     continue;
                 }
                 pc->cid = cid; /* no part exceeds a cap, by rounding: their budgets below */
                 pc->cx = cx;
             }
         }
-        if (phase_parts(pc, &ph[p], x_s, &st, Q, sn, false, res, &st))
+        if (phase_parts(pc, &ph[p], x_s, &st, &e, Q, sn, false, &bm, res))
             return;
+        st = e;
     }
 }
 
@@ -668,7 +732,8 @@ typedef struct rprof {
     lsm_real dt;
     lsm_phase ph[7];
     lsm_kin st[8]; /* st[p]: start of phase p; st[7]: the ramp's end */
-    int cp, cq;    /* the phase whose parts' ends pe[1..cq] are known (-1: none) */
+    int cp, cq;    /* the phase whose parts' ends pe[1..cq] are known (-1: none), and its closed form */
+    phase_form form;
     lsm_kin pe[8];
 } rprof;
 
@@ -696,10 +761,11 @@ static const lsm_kin *rprof_part_end(rprof *pf, int p, int q, int Q)
     if (pf->cp != p) {
         pf->cp = p;
         pf->cq = 0;
+        phase_form_of(&pf->ph[p], pf->dt, &pf->form);
     }
     while (pf->cq < q) {
         const int k = ++pf->cq;
-        part_end(&pf->ph[p], pf->dt, &pf->st[p], k, Q, &pf->pe[k]);
+        part_end(&pf->form, &pf->st[p], k, Q, &pf->pe[k]);
     }
     return &pf->pe[q];
 }

@@ -72,29 +72,48 @@ static bool within_limits(const lsm_scurve_limits *lim, lsm_real t1, lsm_real t2
     return jp <= lim->j_max_mm_s3 && jp * (t1 + t2) <= lim->a_max_mm_s2 && jp * PI_R <= 2 * t1 * lim->snap_max_mm_s4;
 }
 
-/* For fixed n1, n2: the smallest n4 that keeps the limits. Returns false on overflow. */
-static bool min_n4(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2, uint32_t *n4)
+/* Rounding can leave the corrected jerk an ulp above a limit: min_n4 steps n4 up at most this often. */
+#define N4_ROUNDING_STEPS 4
+
+/* ceil(x) for 0 <= x < LSM_MAX_INTERVAL_CYCLES, without the library call: below 2^24 the truncated count and its
+ * successor are exact in float, above it x is itself a whole number (so is every x in double). */
+static uint32_t ceil_count(lsm_real x)
+{
+    const uint32_t n = (uint32_t)x;
+    return (lsm_real)n < x ? n + 1u : n;
+}
+
+/* For fixed n1, n2: the smallest n4 that keeps the limits, and eq 34's denominator with it (the expression of
+ * lsm_scurve_jerk_den, so the same value). Returns false on overflow. */
+static bool min_n4(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2, uint32_t *n4,
+                   lsm_real *den)
 {
     const lsm_real t1 = (lsm_real)n1 * dt;
     const lsm_real t2 = (lsm_real)n2 * dt;
     const lsm_real s12 = t1 + t2;
     const lsm_real den0 = s12 * (2 * t1 + t2);
     const lsm_real need = dv / jerk_cap(lim, t1, t2);
-    lsm_real k = 0;
+    uint32_t n = 0;
     if (need > den0) {
-        k = lsm_ceil((need - den0) / (s12 * dt));
-        if (!(k < (lsm_real)LSM_MAX_INTERVAL_CYCLES))
+        const lsm_real x = (need - den0) / (s12 * dt);
+        if (!(x < (lsm_real)LSM_MAX_INTERVAL_CYCLES))
+            return false;
+        n = ceil_count(x);
+        if (!(n < LSM_MAX_INTERVAL_CYCLES))
             return false;
     }
-    uint32_t n = (uint32_t)k;
-    /* rounding can leave the corrected jerk an ulp above a limit: step until it holds */
-    for (int guard = 0; guard < 4 && !within_limits(lim, t1, t2, s12 * (2 * t1 + t2 + (lsm_real)n * dt), dv); guard++)
+    lsm_real d = s12 * (2 * t1 + t2 + (lsm_real)n * dt);
+    for (int guard = 0; guard < N4_ROUNDING_STEPS && !within_limits(lim, t1, t2, d, dv); guard++) {
         n++;
+        d = s12 * (2 * t1 + t2 + (lsm_real)n * dt);
+    }
     *n4 = n;
+    *den = d;
     return true;
 }
 
-/* Rounds x (>= 0) to a cycle count, clamped to the representable range. */
+/* The whole cycles in x (>= 0; truncation is floor there), clamped to the representable range: to_count(x + 0.5)
+ * rounds to the nearest count, to_count(floor(x)) is to_count(x). */
 static uint32_t to_count(lsm_real x)
 {
     if (!(x > 0))
@@ -144,13 +163,13 @@ static void try_candidate(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv
                           uint32_t order, cand_best *best, lsm_scurve_intervals *iv)
 {
     uint32_t n4;
-    if (!min_n4(lim, dt, dv, n1, n2, &n4))
+    lsm_real den;
+    if (!min_n4(lim, dt, dv, n1, n2, &n4, &den))
         return;
     const uint64_t total = 4ull * n1 + 2ull * n2 + n4;
     if (total >= LSM_MAX_INTERVAL_CYCLES)
         return;
     const lsm_scurve_intervals cand = {n1, n2, n4};
-    const lsm_real den = lsm_scurve_jerk_den(&cand, dt);
     if (best->found && (total > best->total ||
                         (total == best->total && (den < best->den || (den == best->den && order > best->order)))))
         return;
@@ -180,7 +199,7 @@ void lsm_scurve_sizer_init(lsm_scurve_sizer *sz, const lsm_scurve_limits *lim, l
     sz->cbrt_x_per_dv = PI_R / (4 * DJ) * (1 - LB_MARGIN); /* x_f per unit dv, rounded down (skip test only) */
     sz->jc_mm_s3 = 2 * t1 * DJ / PI_R;
     sz->t2a_s = A / sz->jc_mm_s3 - t1;
-    sz->c1_cycles = to_count(lsm_floor(t1 / dt + (lsm_real)0.5));
+    sz->c1_cycles = to_count(t1 / dt + (lsm_real)0.5);
     const lsm_real keep = 1 - LB_MARGIN;
     sz->kj_per_dv = keep / (J * dt * dt);
     sz->ka_per_dv = keep / (A * dt);
@@ -202,11 +221,21 @@ static bool window_best(const lsm_scurve_sizer *sz, lsm_real dv, uint32_t c1, ui
     const uint32_t g_order = (g1 - n1_lo) * n_k + (c2 - n2_lo);
     try_candidate(&sz->lim, sz->cycle_s, dv, g1, c2, g_order, &best, iv);
     for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
+        /* every candidate from here on has q = 2 n1 + n2 >= 2 n1: past half the best total, cannot_tie skips them all */
+        if (best.found && 2 * n1 > best.total / 2)
+            break;
         for (uint32_t k = 0; k < n_k; k++) {
             const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
             const uint32_t order = (n1 - n1_lo) * n_k + k;
-            if (order == g_order || (best.found && cannot_tie(&bnd, n1, n2, best.total)))
+            if (order == g_order)
                 continue;
+            if (best.found && cannot_tie(&bnd, n1, n2, best.total)) {
+                /* q grows with k up to n2_hi: when it is past half the best total, so are the rest of the row's
+                 * ascending n2 (skipped the same way); on to the row's n2 = 0, or the next row */
+                if (n2 != 0 && 2 * n1 + n2 > best.total / 2)
+                    k = n2_lo > 0 ? n2_hi - n2_lo : n_k;
+                continue;
+            }
             try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
         }
     }
@@ -228,12 +257,12 @@ bool lsm_scurve_sizer_intervals(const lsm_scurve_sizer *sz, lsm_real dv_mm_s, ls
             t1c = t1f;
             jc = 2 * t1c * DJ / PI_R;
             t2a = A / jc - t1c;
-            c1 = to_count(lsm_floor(t1c / dt + (lsm_real)0.5));
+            c1 = to_count(t1c / dt + (lsm_real)0.5);
         }
     }
     const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
     const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
-    const uint32_t c2 = to_count(lsm_floor(t2c / dt + (lsm_real)0.5));
+    const uint32_t c2 = to_count(t2c / dt + (lsm_real)0.5);
     if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
         return false;
     return window_best(sz, dv_mm_s, c1, c2, iv);

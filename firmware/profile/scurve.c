@@ -136,17 +136,23 @@ typedef struct total_bound {
     lsm_real kj, ka, ks; /* KJ, KA, KS of the comment above, times (1 - LB_MARGIN) */
 } total_bound;
 
-/* True if candidate (n1, n2) certainly takes more cycles than best_total (so it can neither win nor tie). */
-static bool cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
+/* What the bounds say of a candidate against the best total: it may tie (size it), or it certainly takes more
+ * cycles, by the total's floor 2 q or KA (TIE_LONGER), or by KJ / s or KS / (n1 s) (TIE_TOO_SHORT: s = n1 + n2
+ * is too small for the jerk or the snap). */
+typedef enum tie_verdict { TIE_MAYBE = 0, TIE_LONGER = 1, TIE_TOO_SHORT = 2 } tie_verdict;
+
+static tie_verdict cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
 {
     const uint32_t q = 2 * n1 + n2; /* < 2^30: n1, n2 <= LSM_MAX_INTERVAL_CYCLES + 2 (32-bit: no libgcc helper) */
     if (q > best_total / 2)
-        return true; /* the total is at least 2 q (n4 >= 0) */
+        return TIE_LONGER; /* the total is at least 2 q (n4 >= 0) */
     /* room: the largest r that still ties (an integer: r > room means a longer total); the relative margin
      * absorbs the rounding of the products below */
     const lsm_real room = (lsm_real)(best_total - q) * (1 + LB_MARGIN);
+    if (b->ka > room)
+        return TIE_LONGER;
     const lsm_real s = (lsm_real)(n1 + n2);
-    return b->ka > room || b->kj > room * s || b->ks > room * s * (lsm_real)n1;
+    return b->kj > room * s || b->ks > room * s * (lsm_real)n1 ? TIE_TOO_SHORT : TIE_MAYBE;
 }
 
 /* Sizing candidates are ranked by total cycles, then by the larger eq-34 denominator (the lower jerk), then by
@@ -220,23 +226,29 @@ static bool window_best(const lsm_scurve_sizer *sz, lsm_real dv, uint32_t c1, ui
     const uint32_t g1 = c1 < n1_lo ? n1_lo : c1;
     const uint32_t g_order = (g1 - n1_lo) * n_k + (c2 - n2_lo);
     try_candidate(&sz->lim, sz->cycle_s, dv, g1, c2, g_order, &best, iv);
+    const uint32_t n_up = n2_hi - n2_lo + 1; /* the row's n2 = n2_lo .. n2_hi (then 0, when n2_lo > 0) */
     for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
         /* every candidate from here on has q = 2 n1 + n2 >= 2 n1: past half the best total, cannot_tie skips them all */
         if (best.found && 2 * n1 > best.total / 2)
             break;
-        for (uint32_t k = 0; k < n_k; k++) {
-            const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
+        /* the row by s = n1 + n2 descending (the rank keeps the scan order), from the largest n2 with q <= T / 2
+         * (cannot_tie skips the larger ones; T only decreases); see below for the end */
+        const uint32_t n2_room = best.found ? best.total / 2 - 2 * n1 : UINT32_MAX;
+        const uint32_t i0 = n2_hi > n2_room ? n2_hi - n2_room : 0;
+        for (uint32_t i = i0 < n_up ? i0 : n_up; i < n_k; i++) {
+            const uint32_t k = i < n_up ? n_up - 1 - i : n_up;
+            const uint32_t n2 = k < n_up ? n2_lo + k : 0;
             const uint32_t order = (n1 - n1_lo) * n_k + k;
             if (order == g_order)
                 continue;
-            if (best.found && cannot_tie(&bnd, n1, n2, best.total)) {
-                /* q grows with k up to n2_hi: when it is past half the best total, so are the rest of the row's
-                 * ascending n2 (skipped the same way); on to the row's n2 = 0, or the next row */
-                if (n2 != 0 && 2 * n1 + n2 > best.total / 2)
-                    k = n2_lo > 0 ? n2_hi - n2_lo : n_k;
-                continue;
-            }
-            try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
+            const tie_verdict v = best.found ? cannot_tie(&bnd, n1, n2, best.total) : TIE_MAYBE;
+            /* too short: KJ > (T - q) s or KS > (T - q) s n1 (T the best total, with LB_MARGIN to spare). cannot_tie
+             * got there with q <= T / 2, so 2 s <= T - 2 n1, where (T - n1 - s) s grows with s: every smaller s of
+             * the row is too short as well */
+            if (v == TIE_TOO_SHORT)
+                break;
+            if (v == TIE_MAYBE)
+                try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
         }
     }
     return best.found;

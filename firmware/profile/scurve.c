@@ -75,8 +75,8 @@ static bool within_limits(const lsm_scurve_limits *lim, lsm_real t1, lsm_real t2
 /* Rounding can leave the corrected jerk an ulp above a limit: min_n4 steps n4 up at most this often. */
 #define N4_ROUNDING_STEPS 4
 
-/* ceil(x) for 0 <= x < LSM_MAX_INTERVAL_CYCLES, without the library call: below 2^24 the truncated count and its
- * successor are exact in float, above it x is itself a whole number (so is every x in double). */
+/* ceil(x) for 0 <= x < LSM_MAX_INTERVAL_CYCLES, without the library call: the truncation is floor(x), and the count
+ * converts back exactly (in float below 2^24; above it x is itself a whole number; in double always). */
 static uint32_t ceil_count(lsm_real x)
 {
     const uint32_t n = (uint32_t)x;

@@ -261,7 +261,7 @@ static lsm_real cn_sharp(const cn_ctx *c, int j)
 }
 
 /* The sample states of the current solution, stepped from the start of A. */
-static void cn_sample_states(cn_ctx *c)
+CN_NOINLINE static void cn_sample_states(cn_ctx *c)
 {
     c->h = c->L / (lsm_real)CN_SAMPLES;
     c->ca = (c->km - c->b[0].k) / c->L;
@@ -279,7 +279,7 @@ static void cn_sample_states(cn_ctx *c)
 }
 
 /* Curvature of the transition at t. */
-static lsm_real cn_kappa(const cn_ctx *c, lsm_real t)
+CN_NOINLINE static lsm_real cn_kappa(const cn_ctx *c, lsm_real t)
 {
     if (t <= c->L)
         return c->b[0].k + c->ca * t;
@@ -485,7 +485,7 @@ static lsm_real cn_path_max(const cn_ctx *c, lsm_real lo, lsm_real tm, lsm_real 
 
 /* Vertex and path deviation of the current solution. The path distance is refined around every
  * sampled local maximum within 3 % of the largest sample (two at most). */
-static void cn_measure(cn_ctx *c, lsm_real *vd, lsm_real *pd)
+CN_NOINLINE static void cn_measure(cn_ctx *c, lsm_real *vd, lsm_real *pd)
 {
     const int n = 2 * CN_SAMPLES;
     cn_sample_states(c);

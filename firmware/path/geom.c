@@ -26,7 +26,7 @@ static bool geom_orthonormal(const lsm_real e1[3], const lsm_real e2[3])
            lsm_fabs(lsm_dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(lsm_dot3(e1, e2)) <= GEOM_ORTHO_TOL;
 }
 
-static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
+LSM_NOINLINE static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
 {
     for (int i = 0; i < 3; i++)
         e1[i] = e2[i] = LSM_R(0.0);

@@ -182,7 +182,7 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 /* ------------------------------------------------------------------------------------------------------------ */
 /* append                                                                                                       */
 
-static bool geom_moves_rotary(const lsm_geom *g)
+LSM_NOINLINE static bool geom_moves_rotary(const lsm_geom *g)
 {
     if (g->kind != LSM_GEOM_LINE)
         return false;
@@ -242,7 +242,8 @@ static lsm_real trim_room(const lsm_planner *pl, uint32_t pid, const lsm_pblock 
 
 /* Tries a clothoid pair (corner.h) between prev and g within the tolerance left by the fits; on success g is
  * trimmed at its start and ct->g1 is prev trimmed at its end. Else ct->stop (or, collinear, a plain G2 join). */
-static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *g, lsm_real fit_err, corner_try *ct)
+LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *g, lsm_real fit_err,
+                                    corner_try *ct)
 {
     const lsm_real room = trim_room(pl, pl->tail - 1u, prev);
     lsm_corner_params cp;

@@ -151,7 +151,8 @@ _Static_assert(3 * LSM_ARCFIT_MAX <= 255, "lsm_planner.fit_slots is a uint8_t");
 
 /* Slots a run of n points takes when it is emitted (run_element): one element and the clothoid pair of its corner,
  * or a block and a corner pair per segment. `fits`, fr: the run's fit; needs_fit: run_needs_fit of the run. */
-static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const lsm_arcfit_result *fr, bool needs_fit)
+LSM_NOINLINE static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const lsm_arcfit_result *fr,
+                                       bool needs_fit)
 {
     if (n >= 2u && fits && (fr->kind == LSM_ARCFIT_LINE || (needs_fit && arc_fits_tail(pl, fr))))
         return 3u;

@@ -441,7 +441,7 @@ bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
     return false;
 }
 
-static lsm_status geom_trim_check(const lsm_geom *g, lsm_real d)
+LSM_NOINLINE static lsm_status geom_trim_check(const lsm_geom *g, lsm_real d)
 {
     if (g == NULL)
         return LSM_E_NULL;

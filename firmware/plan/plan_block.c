@@ -224,9 +224,9 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 
 /* The corner between the last block (prev) and g, which starts where prev ends. */
 typedef struct corner_try {
-    bool corner; /* a clothoid pair replaces the corner: g1 is prev trimmed, cr the pair */
+    bool corner; /* a clothoid pair replaces the corner: g1 is prev trimmed, g2 g trimmed, cr the pair */
     bool stop;   /* the machine stops at the junction */
-    lsm_geom g1;
+    lsm_geom g1, g2;
     lsm_corner_result cr;
 } corner_try;
 
@@ -240,9 +240,9 @@ static lsm_real trim_room(const lsm_planner *pl, uint32_t pid, const lsm_pblock 
     return prev->g.len;
 }
 
-/* Tries a clothoid pair (corner.h) between prev and g within the tolerance left by the fits; on success g is
- * trimmed at its start and ct->g1 is prev trimmed at its end. Else ct->stop (or, collinear, a plain G2 join). */
-LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *g, lsm_real fit_err,
+/* Tries a clothoid pair (corner.h) between prev and g within the tolerance left by the fits; on success ct->g1 is
+ * prev trimmed at its end and ct->g2 is g trimmed at its start. Else ct->stop (or, collinear, a plain G2 join). */
+LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, const lsm_geom *g, lsm_real fit_err,
                                     corner_try *ct)
 {
     const lsm_real room = trim_room(pl, pl->tail - 1u, prev);
@@ -260,11 +260,10 @@ LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *pre
         cs == LSM_OK && !(cr->trans[0].len + cr->trans[1].len > LEN_EPS * (R1 + prev->g.len + g->len));
     if (cs == LSM_OK && !degenerate && cr->trim1_mm < prev->g.len && cr->trim2_mm < g->len && cr->trim1_mm <= room) {
         ct->g1 = prev->g;
-        lsm_geom g2 = *g;
-        if (lsm_geom_trim_end(&ct->g1, cr->trim1_mm) == LSM_OK && lsm_geom_trim_start(&g2, cr->trim2_mm) == LSM_OK &&
-            ct->g1.len > R0 && g2.len > R0) {
+        ct->g2 = *g;
+        if (lsm_geom_trim_end(&ct->g1, cr->trim1_mm) == LSM_OK &&
+            lsm_geom_trim_start(&ct->g2, cr->trim2_mm) == LSM_OK && ct->g1.len > R0 && ct->g2.len > R0) {
             ct->corner = true;
-            *g = g2;
         } else {
             ct->stop = true;
         }
@@ -333,7 +332,8 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     }
 }
 
-/* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
+/* Appends g (which starts at tail_pos), with corner handling at its start (the block pushed is then g trimmed, a copy:
+ * g itself is left as it was). prog_end: its programmed end. */
 lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
                               const lsm_arcfit_result *fr)
 {
@@ -346,7 +346,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     uint8_t flags = mv->rapid ? (uint8_t)LSM_PB_RAPID : (uint8_t)0;
     corner_try ct;
     ct.corner = ct.stop = false;
-    lsm_geom g_orig = *g, prev_orig = *g;
+    lsm_geom prev_orig;                                  /* (set and used only with a corner) */
     const bool blend = has_prev && pl->tail_tol_mm > R0; /* G64 after a block */
     if (blend && lines_collinear(&prev->g, g)) {
         /* joins G2 as it is */
@@ -358,14 +358,15 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         flags |= LSM_PB_STOP; /* nothing before (start from rest), G61, or a rotary move: an exact stop */
     }
     const bool corner = ct.corner;
+    const lsm_geom *gp = corner ? &ct.g2 : g; /* the block pushed */
     if ((flags & LSM_PB_STOP) && has_prev)
         pl->stats.corner_stops++;
     if (corner) {
         prev_orig = prev->g;
         push_corner(pl, prev, &ct, feed, mv->seq, flags);
     }
-    push_block(pl, g, feed, mv->seq, flags);
-    set_tail(pl, g, mv, prog_end, fr, fit_err);
+    push_block(pl, gp, feed, mv->seq, flags);
+    set_tail(pl, gp, mv, prog_end, fr, fit_err);
     pl->gen++;
     lsm_pl_backward_pass(pl);
     /* a corner that trimmed the block the interpolator's current piece ends in (it runs to the end of the buffer):
@@ -382,7 +383,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
             block_coef(pl, prev);
             pl->stats.corners--;
         }
-        push_block(pl, &g_orig, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
+        push_block(pl, g, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
         pl->stats.corner_stops++;
         pl->stats.horizon_stops++;
         pl->full_pass = 1;

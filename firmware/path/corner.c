@@ -689,8 +689,7 @@ static lsm_status cn_check_input(const lsm_geom *b1, const lsm_geom *b2, const l
     const lsm_geom *bb[2] = {b1, b2};
     for (int i = 0; i < 2; i++) {
         if (bb[i]->kind == LSM_GEOM_LINE) {
-            if (bb[i]->rotary_only || bb[i]->u.line.dir[3] != LSM_R(0.0) || bb[i]->u.line.dir[4] != LSM_R(0.0) ||
-                bb[i]->u.line.dir[5] != LSM_R(0.0))
+            if (bb[i]->rotary_only || lsm_geom_moves_rotary(bb[i]))
                 return LSM_E_ROTARY;
         } else if (lsm_fabs(bb[i]->u.arc.axial_mm) > CN_PLANAR_TOL * bb[i]->len) {
             return LSM_E_NONPLANAR;

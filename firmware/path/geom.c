@@ -428,6 +428,13 @@ void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3])
     (void)lsm_geom_eval(g, g->len, NULL, t, NULL);
 }
 
+bool lsm_geom_moves_rotary(const lsm_geom *g)
+{
+    if (g->kind != LSM_GEOM_LINE)
+        return false;
+    return g->u.line.dir[3] != LSM_R(0.0) || g->u.line.dir[4] != LSM_R(0.0) || g->u.line.dir[5] != LSM_R(0.0);
+}
+
 bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
 {
     if (g->kind == LSM_GEOM_ARC) {

@@ -182,13 +182,6 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 /* ------------------------------------------------------------------------------------------------------------ */
 /* append                                                                                                       */
 
-LSM_NOINLINE static bool geom_moves_rotary(const lsm_geom *g)
-{
-    if (g->kind != LSM_GEOM_LINE)
-        return false;
-    return g->u.line.dir[3] != R0 || g->u.line.dir[4] != R0 || g->u.line.dir[5] != R0;
-}
-
 /* Two lines in the same direction in all axes (nothing to smooth, no stop). */
 static bool lines_collinear(const lsm_geom *a, const lsm_geom *b)
 {
@@ -321,7 +314,7 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pl->tail_prog[i] = prog_end[i];
     pl->tail_tol_mm = mv->tol_mm;
-    pl->tail_rotary = geom_moves_rotary(g) ? 1u : 0u;
+    pl->tail_rotary = lsm_geom_moves_rotary(g) ? 1u : 0u;
     pl->tail_fit_err = fit_err;
     pl->tail_arc = 0;
     pl->tail_switch = 0; /* (plan_fit.c sets it after a chain's closing line) */
@@ -350,7 +343,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     const bool blend = has_prev && pl->tail_tol_mm > R0; /* G64 after a block */
     if (blend && lines_collinear(&prev->g, g)) {
         /* joins G2 as it is */
-    } else if (blend && !pl->tail_rotary && !geom_moves_rotary(g)) {
+    } else if (blend && !pl->tail_rotary && !lsm_geom_moves_rotary(g)) {
         try_corner(pl, prev, g, fit_err, &ct);
         if (ct.stop)
             flags |= LSM_PB_STOP;

@@ -357,8 +357,7 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
                                   const lsm_planner_move *mv)
 {
     const bool eligible = pl->cfg.fit_share > R0 && !mv->rapid && mv->tol_mm > R0 && !g->rotary_only &&
-                          g->u.line.dir[3] == R0 && g->u.line.dir[4] == R0 && g->u.line.dir[5] == R0 &&
-                          run_may_start(pl);
+                          !lsm_geom_moves_rotary(g) && run_may_start(pl);
     lsm_status st;
     if (!eligible || (pl->fit_n > 0 && (mv->feed_mm_s != pl->fit_feed || mv->tol_mm != pl->fit_tol))) {
         st = lsm_pl_emit_run(pl, pl->fit_n);

@@ -279,7 +279,7 @@ CN_NOINLINE static void cn_sample_states(cn_ctx *c)
 }
 
 /* Curvature of the transition at t. */
-CN_NOINLINE static lsm_real cn_kappa(const cn_ctx *c, lsm_real t)
+static lsm_real cn_kappa(const cn_ctx *c, lsm_real t)
 {
     if (t <= c->L)
         return c->b[0].k + c->ca * t;

@@ -43,13 +43,12 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
 
-/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES), the curvature bound of the block and the bound of |q_sss| (the path's
- * own third derivative: sqrt(c² + kappa⁴) on a clothoid, kappa |w| on a helix, kappa² on a planar arc). */
+/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES; the caller zeroes them: the entries not written stay 0), the curvature
+ * bound of the block and the bound of |q_sss| (the path's own third derivative: sqrt(c² + kappa⁴) on a clothoid,
+ * kappa |w| on a helix, kappa² on a planar arc). */
 static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q2[LSM_MAX_AXES],
                         lsm_real q3[LSM_MAX_AXES], lsm_real *kmax, lsm_real *q3max)
 {
-    for (int i = 0; i < LSM_MAX_AXES; i++)
-        q1[i] = q2[i] = q3[i] = R0;
     *kmax = *q3max = R0;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
@@ -136,8 +135,10 @@ static uint16_t bf16_up(lsm_real x)
 static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 {
     const lsm_planner_config *cf = &pl->cfg;
-    lsm_real q1[LSM_MAX_AXES], q2[LSM_MAX_AXES], q3[LSM_MAX_AXES], kmax, q3max;
-    geom_bounds(&b->g, q1, q2, q3, &kmax, &q3max);
+    lsm_real q[3][LSM_MAX_AXES], kmax, q3max; /* Q1, Q2, Q3 per axis */
+    memset(q, 0, sizeof q);                   /* (one call: the axes geom_bounds leaves are 0) */
+    geom_bounds(&b->g, q[0], q[1], q[2], &kmax, &q3max);
+    const lsm_real *q1 = q[0], *q2 = q[1], *q3 = q[2];
     lsm_real av = R0, aa = R0, ba = R0, aj = R0, bj = R0, gj = R0, as = R0;
     for (int i = 0; i < LSM_MAX_AXES; i++) {
         if (!(cf->axis_mask & (1u << i)))

@@ -668,7 +668,10 @@ static uint8_t tick_cause(const lsm_interp *ip, uint8_t hint)
     return hint;
 }
 
-/* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
+static void retry_override(lsm_interp *ip);
+
+/* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. Without
+ * lsm_interp_prepare (the step is the background too) a pending override is retried here, before the piece. */
 static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t hint)
 {
     lsm_interp_prep *q = &ip->prep;
@@ -682,6 +685,8 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t h
         return NULL; /* failed in the background, which prepared the piece after it */
     ip->tick_plans++;
     ip->tick_cause[tick_cause(ip, hint)]++;
+    if (!ip->bg)
+        retry_override(ip);
     return plan_switch(ip, w) == LSM_OK ? q : NULL;
 }
 
@@ -1179,14 +1184,17 @@ static lsm_status prepare_successor(lsm_interp *ip, swpt *w)
     return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
 }
 
-/* lsm_interp_prepare: an override the planner could not apply, tried again once the machine runs a new piece. */
+/* lsm_interp_prepare (or, without it, the step before it plans a piece): an override the planner could not apply,
+ * tried again once the machine has run ovr_gap new pieces since the last try (the gap doubles after each try that fails: lsm_interp_set_override). */
 static void retry_override(lsm_interp *ip)
 {
-    if (!ip->ovr_retry || ip->ovr_zero || ip->serial == ip->ovr_try_serial)
+    if (!ip->ovr_retry || ip->ovr_zero || ip->serial - ip->ovr_try_serial < ip->ovr_gap)
         return;
     ip->ovr_try_serial = ip->serial;
     if (lsm_planner_set_override(ip->pl, ip->ovr, ip->blk, ip->v_mm_s) != LSM_E_PL_OVR_LATER)
         ip->ovr_retry = 0;
+    else if (ip->ovr_gap < LSM_INTERP_OVR_GAP_MAX)
+        ip->ovr_gap = (uint8_t)(ip->ovr_gap * 2u);
 }
 
 lsm_status lsm_interp_prepare(lsm_interp *ip)
@@ -1255,6 +1263,7 @@ lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real f)
         return st;
     ip->ovr_later++;
     ip->ovr_retry = 1;
+    ip->ovr_gap = 1;
     ip->ovr_try_serial = ip->serial;
     return LSM_OK;
 }

@@ -216,8 +216,10 @@ typedef struct lsm_interp {
     uint32_t bg_gen;
     uint8_t bg_hold;
     uint8_t ovr_retry; /* the override ovr is not applied yet (LSM_E_PL_OVR_LATER): lsm_interp_prepare retries it */
-    uint8_t reserved3[2];
-    uint32_t ovr_try_serial; /* the piece (serial) when it was last tried: retried once per new piece */
+    uint8_t ovr_gap;   /* new pieces from one retry to the next (1, doubling after each retry that fails, at most
+                          LSM_INTERP_OVR_GAP_MAX) */
+    uint8_t reserved3;
+    uint32_t ovr_try_serial; /* the piece (serial) when it was last tried */
     uint32_t ovr_later;      /* override changes the planner could not apply at once (then retried) */
 } lsm_interp;
 
@@ -241,9 +243,13 @@ void lsm_interp_hold(lsm_interp *ip);
 void lsm_interp_resume(lsm_interp *ip);
 
 /* Feed override factor 0 .. 2 (0 holds; leaving 0 resumes). Where the planner cannot apply it from the machine's
- * state (LSM_E_PL_OVR_LATER: rare, the plan stays as it was), it is kept and lsm_interp_prepare tries it again once
- * per new piece until it applies or another factor replaces it; ovr_later counts these. Errors: LSM_E_NULL,
- * LSM_E_NAN, LSM_E_PL_OVERRIDE. Background. */
+ * state (LSM_E_PL_OVR_LATER: rare, the plan stays as it was), it is kept and tried again until it applies or
+ * another factor replaces it, by lsm_interp_prepare (without it: by the step, before it plans a piece): after the
+ * next new piece, then after 2, 4, ... new pieces, at most LSM_INTERP_OVR_GAP_MAX apart, so that a change that stays
+ * pending costs at most one planner override call (up to 8 backward passes) per LSM_INTERP_OVR_GAP_MAX pieces, not
+ * one per piece. ovr_later counts these changes. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE. Background. */
+#define LSM_INTERP_OVR_GAP_MAX 16u
+
 lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real factor);
 
 /* Current feed along the path (mm/s) and state. Control cycle (or after it, in a synchronous loop). */

@@ -11,6 +11,15 @@
 
 #include "lsm_config.h"
 
+/* A function kept out of line: where GCC's -Os inlining (through link-time optimisation too) copies a function into
+ * each of its callers although one shared copy is smaller (measured on the Cortex-M4F image, docs/cortex_m.md "Core
+ * flash, out of line"; only background code, never the control cycle's). */
+#if defined(__GNUC__)
+#define LSM_NOINLINE __attribute__((noinline))
+#else
+#define LSM_NOINLINE
+#endif
+
 /* fabs and sqrt as compiler builtins where available: one VABS/VSQRT on the Cortex-M4F instead of a library
  * call of 10-20 instructions when the library names are not expanded inline. */
 #if LSM_REAL_IS_FLOAT

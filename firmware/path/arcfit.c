@@ -140,8 +140,8 @@ static af_plane_kind af_plane_free(const lsm_real p0[3], const lsm_arcfit_pt *q,
 
 /* The arc's plane: the one given (pc; the chord direction u is projected into it), or the chord's with the points'
  * offsets from it. Writes the unit normal nh and the in-plane chord direction u (unit; on entry the chord's). */
-static af_plane_kind af_plane(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real L,
-                              const lsm_arcfit_plane *pc, lsm_real u[3], lsm_real nh[3])
+LSM_NOINLINE static af_plane_kind af_plane(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_real L,
+                                           const lsm_arcfit_plane *pc, lsm_real u[3], lsm_real nh[3])
 {
     if (pc != NULL && pc->kind == LSM_ARCFIT_PLANE_NORMAL) {
         /* the chord must lie in that plane (it joins the previous arc's end to a point on its plane) */

@@ -261,7 +261,7 @@ static lsm_real cn_sharp(const cn_ctx *c, int j)
 }
 
 /* The sample states of the current solution, stepped from the start of A. */
-static void cn_sample_states(cn_ctx *c)
+CN_NOINLINE static void cn_sample_states(cn_ctx *c)
 {
     c->h = c->L / (lsm_real)CN_SAMPLES;
     c->ca = (c->km - c->b[0].k) / c->L;
@@ -485,7 +485,7 @@ static lsm_real cn_path_max(const cn_ctx *c, lsm_real lo, lsm_real tm, lsm_real 
 
 /* Vertex and path deviation of the current solution. The path distance is refined around every
  * sampled local maximum within 3 % of the largest sample (two at most). */
-static void cn_measure(cn_ctx *c, lsm_real *vd, lsm_real *pd)
+CN_NOINLINE static void cn_measure(cn_ctx *c, lsm_real *vd, lsm_real *pd)
 {
     const int n = 2 * CN_SAMPLES;
     cn_sample_states(c);
@@ -689,8 +689,7 @@ static lsm_status cn_check_input(const lsm_geom *b1, const lsm_geom *b2, const l
     const lsm_geom *bb[2] = {b1, b2};
     for (int i = 0; i < 2; i++) {
         if (bb[i]->kind == LSM_GEOM_LINE) {
-            if (bb[i]->rotary_only || bb[i]->u.line.dir[3] != LSM_R(0.0) || bb[i]->u.line.dir[4] != LSM_R(0.0) ||
-                bb[i]->u.line.dir[5] != LSM_R(0.0))
+            if (bb[i]->rotary_only || lsm_geom_moves_rotary(bb[i]))
                 return LSM_E_ROTARY;
         } else if (lsm_fabs(bb[i]->u.arc.axial_mm) > CN_PLANAR_TOL * bb[i]->len) {
             return LSM_E_NONPLANAR;

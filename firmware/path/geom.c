@@ -26,7 +26,7 @@ static bool geom_orthonormal(const lsm_real e1[3], const lsm_real e2[3])
            lsm_fabs(lsm_dot3(e2, e2) - LSM_R(1.0)) <= GEOM_ORTHO_TOL && lsm_fabs(lsm_dot3(e1, e2)) <= GEOM_ORTHO_TOL;
 }
 
-static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
+LSM_NOINLINE static bool geom_plane_basis(lsm_geom_plane plane, lsm_real e1[3], lsm_real e2[3])
 {
     for (int i = 0; i < 3; i++)
         e1[i] = e2[i] = LSM_R(0.0);
@@ -428,6 +428,13 @@ void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3])
     (void)lsm_geom_eval(g, g->len, NULL, t, NULL);
 }
 
+bool lsm_geom_moves_rotary(const lsm_geom *g)
+{
+    if (g->kind != LSM_GEOM_LINE)
+        return false;
+    return g->u.line.dir[3] != LSM_R(0.0) || g->u.line.dir[4] != LSM_R(0.0) || g->u.line.dir[5] != LSM_R(0.0);
+}
+
 bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
 {
     if (g->kind == LSM_GEOM_ARC) {
@@ -441,7 +448,7 @@ bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3])
     return false;
 }
 
-static lsm_status geom_trim_check(const lsm_geom *g, lsm_real d)
+LSM_NOINLINE static lsm_status geom_trim_check(const lsm_geom *g, lsm_real d)
 {
     if (g == NULL)
         return LSM_E_NULL;

@@ -132,6 +132,8 @@ void lsm_geom_start_tangent(const lsm_geom *g, lsm_real t[3]);
 void lsm_geom_end_tangent(const lsm_geom *g, lsm_real t[3]);
 /* The plane normal of an arc or clothoid (e1 x e2); false for a line. */
 bool lsm_geom_normal(const lsm_geom *g, lsm_real n[3]);
+/* A line that moves a rotary axis (A, B or C: dir[3..5] not 0); false for arcs and clothoids. Background. */
+bool lsm_geom_moves_rotary(const lsm_geom *g);
 
 /* Remove d from the start / the end (0 <= d < len). Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_INF,
  * LSM_E_RANGE (d < 0 or d >= len). */

@@ -43,13 +43,12 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
 
-/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES), the curvature bound of the block and the bound of |q_sss| (the path's
- * own third derivative: sqrt(c² + kappa⁴) on a clothoid, kappa |w| on a helix, kappa² on a planar arc). */
+/* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES; the caller zeroes them: the entries not written stay 0), the curvature
+ * bound of the block and the bound of |q_sss| (the path's own third derivative: sqrt(c² + kappa⁴) on a clothoid,
+ * kappa |w| on a helix, kappa² on a planar arc). */
 static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q2[LSM_MAX_AXES],
                         lsm_real q3[LSM_MAX_AXES], lsm_real *kmax, lsm_real *q3max)
 {
-    for (int i = 0; i < LSM_MAX_AXES; i++)
-        q1[i] = q2[i] = q3[i] = R0;
     *kmax = *q3max = R0;
     if (g->kind == LSM_GEOM_LINE) {
         for (int i = 0; i < LSM_MAX_AXES; i++)
@@ -136,8 +135,10 @@ static uint16_t bf16_up(lsm_real x)
 static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 {
     const lsm_planner_config *cf = &pl->cfg;
-    lsm_real q1[LSM_MAX_AXES], q2[LSM_MAX_AXES], q3[LSM_MAX_AXES], kmax, q3max;
-    geom_bounds(&b->g, q1, q2, q3, &kmax, &q3max);
+    lsm_real q[3][LSM_MAX_AXES], kmax, q3max; /* Q1, Q2, Q3 per axis */
+    memset(q, 0, sizeof q);                   /* (one call: the axes geom_bounds leaves are 0) */
+    geom_bounds(&b->g, q[0], q[1], q[2], &kmax, &q3max);
+    const lsm_real *q1 = q[0], *q2 = q[1], *q3 = q[2];
     lsm_real av = R0, aa = R0, ba = R0, aj = R0, bj = R0, gj = R0, as = R0;
     for (int i = 0; i < LSM_MAX_AXES; i++) {
         if (!(cf->axis_mask & (1u << i)))
@@ -182,13 +183,6 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
 /* ------------------------------------------------------------------------------------------------------------ */
 /* append                                                                                                       */
 
-static bool geom_moves_rotary(const lsm_geom *g)
-{
-    if (g->kind != LSM_GEOM_LINE)
-        return false;
-    return g->u.line.dir[3] != R0 || g->u.line.dir[4] != R0 || g->u.line.dir[5] != R0;
-}
-
 /* Two lines in the same direction in all axes (nothing to smooth, no stop). */
 static bool lines_collinear(const lsm_geom *a, const lsm_geom *b)
 {
@@ -224,9 +218,9 @@ static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32
 
 /* The corner between the last block (prev) and g, which starts where prev ends. */
 typedef struct corner_try {
-    bool corner; /* a clothoid pair replaces the corner: g1 is prev trimmed, cr the pair */
+    bool corner; /* a clothoid pair replaces the corner: g1 is prev trimmed, g2 g trimmed, cr the pair */
     bool stop;   /* the machine stops at the junction */
-    lsm_geom g1;
+    lsm_geom g1, g2;
     lsm_corner_result cr;
 } corner_try;
 
@@ -240,9 +234,10 @@ static lsm_real trim_room(const lsm_planner *pl, uint32_t pid, const lsm_pblock 
     return prev->g.len;
 }
 
-/* Tries a clothoid pair (corner.h) between prev and g within the tolerance left by the fits; on success g is
- * trimmed at its start and ct->g1 is prev trimmed at its end. Else ct->stop (or, collinear, a plain G2 join). */
-static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *g, lsm_real fit_err, corner_try *ct)
+/* Tries a clothoid pair (corner.h) between prev and g within the tolerance left by the fits; on success ct->g1 is
+ * prev trimmed at its end and ct->g2 is g trimmed at its start. Else ct->stop (or, collinear, a plain G2 join). */
+LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, const lsm_geom *g, lsm_real fit_err,
+                                    corner_try *ct)
 {
     const lsm_real room = trim_room(pl, pl->tail - 1u, prev);
     lsm_corner_params cp;
@@ -259,11 +254,10 @@ static void try_corner(const lsm_planner *pl, const lsm_pblock *prev, lsm_geom *
         cs == LSM_OK && !(cr->trans[0].len + cr->trans[1].len > LEN_EPS * (R1 + prev->g.len + g->len));
     if (cs == LSM_OK && !degenerate && cr->trim1_mm < prev->g.len && cr->trim2_mm < g->len && cr->trim1_mm <= room) {
         ct->g1 = prev->g;
-        lsm_geom g2 = *g;
-        if (lsm_geom_trim_end(&ct->g1, cr->trim1_mm) == LSM_OK && lsm_geom_trim_start(&g2, cr->trim2_mm) == LSM_OK &&
-            ct->g1.len > R0 && g2.len > R0) {
+        ct->g2 = *g;
+        if (lsm_geom_trim_end(&ct->g1, cr->trim1_mm) == LSM_OK &&
+            lsm_geom_trim_start(&ct->g2, cr->trim2_mm) == LSM_OK && ct->g1.len > R0 && ct->g2.len > R0) {
             ct->corner = true;
-            *g = g2;
         } else {
             ct->stop = true;
         }
@@ -321,7 +315,7 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     for (int i = 0; i < LSM_MAX_AXES; i++)
         pl->tail_prog[i] = prog_end[i];
     pl->tail_tol_mm = mv->tol_mm;
-    pl->tail_rotary = geom_moves_rotary(g) ? 1u : 0u;
+    pl->tail_rotary = lsm_geom_moves_rotary(g) ? 1u : 0u;
     pl->tail_fit_err = fit_err;
     pl->tail_arc = 0;
     pl->tail_switch = 0; /* (plan_fit.c sets it after a chain's closing line) */
@@ -332,7 +326,8 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     }
 }
 
-/* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
+/* Appends g (which starts at tail_pos), with corner handling at its start (the block pushed is then g trimmed, a copy:
+ * g itself is left as it was). prog_end: its programmed end. */
 lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
                               const lsm_arcfit_result *fr)
 {
@@ -345,11 +340,11 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
     uint8_t flags = mv->rapid ? (uint8_t)LSM_PB_RAPID : (uint8_t)0;
     corner_try ct;
     ct.corner = ct.stop = false;
-    lsm_geom g_orig = *g, prev_orig = *g;
+    lsm_geom prev_orig;                                  /* (set and used only with a corner) */
     const bool blend = has_prev && pl->tail_tol_mm > R0; /* G64 after a block */
     if (blend && lines_collinear(&prev->g, g)) {
         /* joins G2 as it is */
-    } else if (blend && !pl->tail_rotary && !geom_moves_rotary(g)) {
+    } else if (blend && !pl->tail_rotary && !lsm_geom_moves_rotary(g)) {
         try_corner(pl, prev, g, fit_err, &ct);
         if (ct.stop)
             flags |= LSM_PB_STOP;
@@ -357,14 +352,15 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
         flags |= LSM_PB_STOP; /* nothing before (start from rest), G61, or a rotary move: an exact stop */
     }
     const bool corner = ct.corner;
+    const lsm_geom *gp = corner ? &ct.g2 : g; /* the block pushed */
     if ((flags & LSM_PB_STOP) && has_prev)
         pl->stats.corner_stops++;
     if (corner) {
         prev_orig = prev->g;
         push_corner(pl, prev, &ct, feed, mv->seq, flags);
     }
-    push_block(pl, g, feed, mv->seq, flags);
-    set_tail(pl, g, mv, prog_end, fr, fit_err);
+    push_block(pl, gp, feed, mv->seq, flags);
+    set_tail(pl, gp, mv, prog_end, fr, fit_err);
     pl->gen++;
     lsm_pl_backward_pass(pl);
     /* a corner that trimmed the block the interpolator's current piece ends in (it runs to the end of the buffer):
@@ -381,7 +377,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_mo
             block_coef(pl, prev);
             pl->stats.corners--;
         }
-        push_block(pl, &g_orig, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
+        push_block(pl, g, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
         pl->stats.corner_stops++;
         pl->stats.horizon_stops++;
         pl->full_pass = 1;

@@ -151,7 +151,8 @@ _Static_assert(3 * LSM_ARCFIT_MAX <= 255, "lsm_planner.fit_slots is a uint8_t");
 
 /* Slots a run of n points takes when it is emitted (run_element): one element and the clothoid pair of its corner,
  * or a block and a corner pair per segment. `fits`, fr: the run's fit; needs_fit: run_needs_fit of the run. */
-static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const lsm_arcfit_result *fr, bool needs_fit)
+LSM_NOINLINE static uint32_t run_slots(const lsm_planner *pl, uint32_t n, bool fits, const lsm_arcfit_result *fr,
+                                       bool needs_fit)
 {
     if (n >= 2u && fits && (fr->kind == LSM_ARCFIT_LINE || (needs_fit && arc_fits_tail(pl, fr))))
         return 3u;
@@ -356,8 +357,7 @@ lsm_status lsm_pl_append_line_fit(lsm_planner *pl, lsm_geom *g, const lsm_real e
                                   const lsm_planner_move *mv)
 {
     const bool eligible = pl->cfg.fit_share > R0 && !mv->rapid && mv->tol_mm > R0 && !g->rotary_only &&
-                          g->u.line.dir[3] == R0 && g->u.line.dir[4] == R0 && g->u.line.dir[5] == R0 &&
-                          run_may_start(pl);
+                          !lsm_geom_moves_rotary(g) && run_may_start(pl);
     lsm_status st;
     if (!eligible || (pl->fit_n > 0 && (mv->feed_mm_s != pl->fit_feed || mv->tol_mm != pl->fit_tol))) {
         st = lsm_pl_emit_run(pl, pl->fit_n);

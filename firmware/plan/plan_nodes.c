@@ -228,7 +228,7 @@ typedef struct vstate {
     lsm_real lo; /* lowest cap since the last node */
 } vstate;
 
-static void vreset(vstate *s)
+LSM_NOINLINE static void vreset(vstate *s)
 {
     s->M = -R1;
     s->m = LSM_REAL_MAX;
@@ -390,7 +390,7 @@ void lsm_planner_update(lsm_planner *pl)
 }
 
 /* Sets the override state and plans with it. */
-static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far, uint32_t sw)
+LSM_NOINLINE static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far, uint32_t sw)
 {
     pl->ovr_near = near;
     pl->ovr_far = far;

@@ -79,6 +79,26 @@ static void test_rounded_centre_random(void **state)
     }
 }
 
+/* lsm_geom_moves_rotary: a line with an A, B or C component (also a rotary-only one), never an arc. */
+static void test_moves_rotary(void **state)
+{
+    (void)state;
+    const lsm_real p0[LSM_MAX_AXES] = {0, 0, 0, 0, 0, 0};
+    lsm_geom g;
+    for (int ax = 0; ax < LSM_MAX_AXES; ax++) {
+        lsm_real p1[LSM_MAX_AXES] = {0, 0, 0, 0, 0, 0};
+        p1[ax] = LSM_R(2.0);
+        assert_int_equal(lsm_geom_line_init(&g, p0, p1), LSM_OK);
+        assert_int_equal(lsm_geom_moves_rotary(&g), ax >= 3);
+        p1[0] = LSM_R(1.0); /* with a linear move too */
+        assert_int_equal(lsm_geom_line_init(&g, p0, p1), LSM_OK);
+        assert_int_equal(lsm_geom_moves_rotary(&g), ax >= 3);
+    }
+    const lsm_real s[3] = {10, 0, 0}, e[3] = {0, 10, 0}, c[3] = {0, 0, 0};
+    assert_int_equal(lsm_geom_arc_init(&g, s, e, c, LSM_GEOM_PLANE_XY, 1, 0), LSM_OK);
+    assert_false(lsm_geom_moves_rotary(&g));
+}
+
 int main(int argc, char **argv)
 {
     g_seed = test_arg_u(argc, argv, 1, g_seed);
@@ -86,6 +106,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rounded_centre_quarter),
         cmocka_unit_test(test_rounded_centre_random),
+        cmocka_unit_test(test_moves_rotary),
     };
     return test_seed_finish(argv[0], g_seed, g_count, cmocka_run_group_tests(tests, NULL, NULL));
 }

@@ -72,29 +72,48 @@ static bool within_limits(const lsm_scurve_limits *lim, lsm_real t1, lsm_real t2
     return jp <= lim->j_max_mm_s3 && jp * (t1 + t2) <= lim->a_max_mm_s2 && jp * PI_R <= 2 * t1 * lim->snap_max_mm_s4;
 }
 
-/* For fixed n1, n2: the smallest n4 that keeps the limits. Returns false on overflow. */
-static bool min_n4(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2, uint32_t *n4)
+/* Rounding can leave the corrected jerk an ulp above a limit: min_n4 steps n4 up at most this often. */
+#define N4_ROUNDING_STEPS 4
+
+/* ceil(x) for 0 <= x < LSM_MAX_INTERVAL_CYCLES, without the library call: the truncation is floor(x), and the count
+ * converts back exactly (in float below 2^24; above it x is itself a whole number; in double always). */
+static uint32_t ceil_count(lsm_real x)
+{
+    const uint32_t n = (uint32_t)x;
+    return (lsm_real)n < x ? n + 1u : n;
+}
+
+/* For fixed n1, n2: the smallest n4 that keeps the limits, and eq 34's denominator with it (the expression of
+ * lsm_scurve_jerk_den, so the same value). Returns false on overflow. */
+static bool min_n4(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv, uint32_t n1, uint32_t n2, uint32_t *n4,
+                   lsm_real *den)
 {
     const lsm_real t1 = (lsm_real)n1 * dt;
     const lsm_real t2 = (lsm_real)n2 * dt;
     const lsm_real s12 = t1 + t2;
     const lsm_real den0 = s12 * (2 * t1 + t2);
     const lsm_real need = dv / jerk_cap(lim, t1, t2);
-    lsm_real k = 0;
+    uint32_t n = 0;
     if (need > den0) {
-        k = lsm_ceil((need - den0) / (s12 * dt));
-        if (!(k < (lsm_real)LSM_MAX_INTERVAL_CYCLES))
+        const lsm_real x = (need - den0) / (s12 * dt);
+        if (!(x < (lsm_real)LSM_MAX_INTERVAL_CYCLES))
+            return false;
+        n = ceil_count(x);
+        if (!(n < LSM_MAX_INTERVAL_CYCLES))
             return false;
     }
-    uint32_t n = (uint32_t)k;
-    /* rounding can leave the corrected jerk an ulp above a limit: step until it holds */
-    for (int guard = 0; guard < 4 && !within_limits(lim, t1, t2, s12 * (2 * t1 + t2 + (lsm_real)n * dt), dv); guard++)
+    lsm_real d = s12 * (2 * t1 + t2 + (lsm_real)n * dt);
+    for (int guard = 0; guard < N4_ROUNDING_STEPS && !within_limits(lim, t1, t2, d, dv); guard++) {
         n++;
+        d = s12 * (2 * t1 + t2 + (lsm_real)n * dt);
+    }
     *n4 = n;
+    *den = d;
     return true;
 }
 
-/* Rounds x (>= 0) to a cycle count, clamped to the representable range. */
+/* The whole cycles in x (>= 0; truncation is floor there), clamped to the representable range: to_count(x + 0.5)
+ * rounds to the nearest count, to_count(floor(x)) is to_count(x). */
 static uint32_t to_count(lsm_real x)
 {
     if (!(x > 0))
@@ -117,17 +136,23 @@ typedef struct total_bound {
     lsm_real kj, ka, ks; /* KJ, KA, KS of the comment above, times (1 - LB_MARGIN) */
 } total_bound;
 
-/* True if candidate (n1, n2) certainly takes more cycles than best_total (so it can neither win nor tie). */
-static bool cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
+/* What the bounds say of a candidate against the best total: it may tie (size it), or it certainly takes more
+ * cycles, by the total's floor 2 q or KA (TIE_LONGER), or by KJ / s or KS / (n1 s) (TIE_TOO_SHORT: s = n1 + n2
+ * is too small for the jerk or the snap). */
+typedef enum tie_verdict { TIE_MAYBE = 0, TIE_LONGER = 1, TIE_TOO_SHORT = 2 } tie_verdict;
+
+static tie_verdict cannot_tie(const total_bound *b, uint32_t n1, uint32_t n2, uint32_t best_total)
 {
     const uint32_t q = 2 * n1 + n2; /* < 2^30: n1, n2 <= LSM_MAX_INTERVAL_CYCLES + 2 (32-bit: no libgcc helper) */
     if (q > best_total / 2)
-        return true; /* the total is at least 2 q (n4 >= 0) */
+        return TIE_LONGER; /* the total is at least 2 q (n4 >= 0) */
     /* room: the largest r that still ties (an integer: r > room means a longer total); the relative margin
      * absorbs the rounding of the products below */
     const lsm_real room = (lsm_real)(best_total - q) * (1 + LB_MARGIN);
+    if (b->ka > room)
+        return TIE_LONGER;
     const lsm_real s = (lsm_real)(n1 + n2);
-    return b->ka > room || b->kj > room * s || b->ks > room * s * (lsm_real)n1;
+    return b->kj > room * s || b->ks > room * s * (lsm_real)n1 ? TIE_TOO_SHORT : TIE_MAYBE;
 }
 
 /* Sizing candidates are ranked by total cycles, then by the larger eq-34 denominator (the lower jerk), then by
@@ -144,13 +169,13 @@ static void try_candidate(const lsm_scurve_limits *lim, lsm_real dt, lsm_real dv
                           uint32_t order, cand_best *best, lsm_scurve_intervals *iv)
 {
     uint32_t n4;
-    if (!min_n4(lim, dt, dv, n1, n2, &n4))
+    lsm_real den;
+    if (!min_n4(lim, dt, dv, n1, n2, &n4, &den))
         return;
     const uint64_t total = 4ull * n1 + 2ull * n2 + n4;
     if (total >= LSM_MAX_INTERVAL_CYCLES)
         return;
     const lsm_scurve_intervals cand = {n1, n2, n4};
-    const lsm_real den = lsm_scurve_jerk_den(&cand, dt);
     if (best->found && (total > best->total ||
                         (total == best->total && (den < best->den || (den == best->den && order > best->order)))))
         return;
@@ -180,7 +205,7 @@ void lsm_scurve_sizer_init(lsm_scurve_sizer *sz, const lsm_scurve_limits *lim, l
     sz->cbrt_x_per_dv = PI_R / (4 * DJ) * (1 - LB_MARGIN); /* x_f per unit dv, rounded down (skip test only) */
     sz->jc_mm_s3 = 2 * t1 * DJ / PI_R;
     sz->t2a_s = A / sz->jc_mm_s3 - t1;
-    sz->c1_cycles = to_count(lsm_floor(t1 / dt + (lsm_real)0.5));
+    sz->c1_cycles = to_count(t1 / dt + (lsm_real)0.5);
     const lsm_real keep = 1 - LB_MARGIN;
     sz->kj_per_dv = keep / (J * dt * dt);
     sz->ka_per_dv = keep / (A * dt);
@@ -201,13 +226,29 @@ static bool window_best(const lsm_scurve_sizer *sz, lsm_real dv, uint32_t c1, ui
     const uint32_t g1 = c1 < n1_lo ? n1_lo : c1;
     const uint32_t g_order = (g1 - n1_lo) * n_k + (c2 - n2_lo);
     try_candidate(&sz->lim, sz->cycle_s, dv, g1, c2, g_order, &best, iv);
+    const uint32_t n_up = n2_hi - n2_lo + 1; /* the row's n2 = n2_lo .. n2_hi (then 0, when n2_lo > 0) */
     for (uint32_t n1 = n1_lo; n1 <= n1_hi; n1++) {
-        for (uint32_t k = 0; k < n_k; k++) {
-            const uint32_t n2 = k > n2_hi - n2_lo ? 0 : n2_lo + k;
+        /* every candidate from here on has q = 2 n1 + n2 >= 2 n1: past half the best total, cannot_tie skips them all */
+        if (best.found && 2 * n1 > best.total / 2)
+            break;
+        /* the row by s = n1 + n2 descending (the rank keeps the scan order), from the largest n2 with q <= T / 2
+         * (cannot_tie skips the larger ones; T only decreases); see below for the end */
+        const uint32_t n2_room = best.found ? best.total / 2 - 2 * n1 : UINT32_MAX;
+        const uint32_t i0 = n2_hi > n2_room ? n2_hi - n2_room : 0;
+        for (uint32_t i = i0 < n_up ? i0 : n_up; i < n_k; i++) {
+            const uint32_t k = i < n_up ? n_up - 1 - i : n_up;
+            const uint32_t n2 = k < n_up ? n2_lo + k : 0;
             const uint32_t order = (n1 - n1_lo) * n_k + k;
-            if (order == g_order || (best.found && cannot_tie(&bnd, n1, n2, best.total)))
+            if (order == g_order)
                 continue;
-            try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
+            const tie_verdict v = best.found ? cannot_tie(&bnd, n1, n2, best.total) : TIE_MAYBE;
+            /* too short: KJ > (T - q) s or KS > (T - q) s n1 (T the best total, with LB_MARGIN to spare). cannot_tie
+             * got there with q <= T / 2, so 2 s <= T - 2 n1, where (T - n1 - s) s grows with s: every smaller s of
+             * the row is too short as well */
+            if (v == TIE_TOO_SHORT)
+                break;
+            if (v == TIE_MAYBE)
+                try_candidate(&sz->lim, sz->cycle_s, dv, n1, n2, order, &best, iv);
         }
     }
     return best.found;
@@ -228,12 +269,12 @@ bool lsm_scurve_sizer_intervals(const lsm_scurve_sizer *sz, lsm_real dv_mm_s, ls
             t1c = t1f;
             jc = 2 * t1c * DJ / PI_R;
             t2a = A / jc - t1c;
-            c1 = to_count(lsm_floor(t1c / dt + (lsm_real)0.5));
+            c1 = to_count(t1c / dt + (lsm_real)0.5);
         }
     }
     const lsm_real t2f = lsm_sqrt(t1c * t1c / 4 + dv_mm_s / jc) - 3 * t1c / 2;
     const lsm_real t2c = lsm_max2(lsm_min2(t2a, t2f), 0);
-    const uint32_t c2 = to_count(lsm_floor(t2c / dt + (lsm_real)0.5));
+    const uint32_t c2 = to_count(t2c / dt + (lsm_real)0.5);
     if (c1 >= LSM_MAX_INTERVAL_CYCLES || c2 >= LSM_MAX_INTERVAL_CYCLES)
         return false;
     return window_best(sz, dv_mm_s, c1, c2, iv);

@@ -668,7 +668,19 @@ static uint8_t tick_cause(const lsm_interp *ip, uint8_t hint)
     return hint;
 }
 
-static void retry_override(lsm_interp *ip);
+/* A change of the override the planner could not apply (lsm_interp_set_override), tried again once the machine has run
+ * ovr_gap new pieces since the last try; the gap doubles after each try that fails, up to LSM_INTERP_OVR_GAP_MAX.
+ * Called by lsm_interp_prepare, and without it by the step before it plans a piece (piece_for). */
+static void retry_override(lsm_interp *ip)
+{
+    if (!ip->ovr_retry || ip->ovr_zero || ip->serial - ip->ovr_try_serial < ip->ovr_gap)
+        return;
+    ip->ovr_try_serial = ip->serial;
+    if (lsm_planner_set_override(ip->pl, ip->ovr, ip->blk, ip->v_mm_s) != LSM_E_PL_OVR_LATER)
+        ip->ovr_retry = 0;
+    else if (ip->ovr_gap < LSM_INTERP_OVR_GAP_MAX)
+        ip->ovr_gap = (uint8_t)(ip->ovr_gap * 2u);
+}
 
 /* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. Without
  * lsm_interp_prepare (the step is the background too) a pending override is retried here, before the piece. */
@@ -1182,19 +1194,6 @@ static lsm_status prepare_successor(lsm_interp *ip, swpt *w)
     ip->prep.skip_phase = ph;
     ip->prep.skip_mode = mode;
     return st == LSM_OK ? LSM_OK : LSM_E_INFEASIBLE;
-}
-
-/* lsm_interp_prepare (or, without it, the step before it plans a piece): an override the planner could not apply,
- * tried again once the machine has run ovr_gap new pieces since the last try (the gap doubles after each try that fails: lsm_interp_set_override). */
-static void retry_override(lsm_interp *ip)
-{
-    if (!ip->ovr_retry || ip->ovr_zero || ip->serial - ip->ovr_try_serial < ip->ovr_gap)
-        return;
-    ip->ovr_try_serial = ip->serial;
-    if (lsm_planner_set_override(ip->pl, ip->ovr, ip->blk, ip->v_mm_s) != LSM_E_PL_OVR_LATER)
-        ip->ovr_retry = 0;
-    else if (ip->ovr_gap < LSM_INTERP_OVR_GAP_MAX)
-        ip->ovr_gap = (uint8_t)(ip->ovr_gap * 2u);
 }
 
 lsm_status lsm_interp_prepare(lsm_interp *ip)

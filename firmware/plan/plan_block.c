@@ -328,8 +328,8 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
 
 /* Appends g (which starts at tail_pos), with corner handling at its start (the block pushed is then g trimmed, a copy:
  * g itself is left as it was). prog_end: its programmed end. */
-lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
-                              const lsm_arcfit_result *fr)
+lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv,
+                              const lsm_real prog_end[6], const lsm_arcfit_result *fr)
 {
     const lsm_real fit_err = fr ? fr->err_mm : R0;
     if (lsm_planner_free(pl) < 3)

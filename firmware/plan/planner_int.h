@@ -215,9 +215,10 @@ bool lsm_pl_horizon_feasible(lsm_planner *pl, bool force);
 /* ---- intake (plan_block.c, plan_fit.c) and the commitment (planner.c) ---- */
 
 lsm_status lsm_pl_check_vals(const lsm_real *v, int n);
-/* Appends g (which starts at tail_pos), with corner handling at its start. prog_end: its programmed end. */
-lsm_status lsm_pl_append_geom(lsm_planner *pl, lsm_geom *g, const lsm_planner_move *mv, const lsm_real prog_end[6],
-                              const lsm_arcfit_result *fr);
+/* Appends g (which starts at tail_pos; not changed: with a corner the block pushed is a trimmed copy), with corner
+ * handling at its start. prog_end: its programmed end. */
+lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv,
+                              const lsm_real prog_end[6], const lsm_arcfit_result *fr);
 /* The geometric end of g (which starts at start) in end; true when it is the programmed end prog_end within
  * rounding (it is then taken as exactly that point). */
 bool lsm_pl_geom_end(const lsm_geom *g, const lsm_real start[LSM_MAX_AXES], const lsm_real prog_end[LSM_MAX_AXES],

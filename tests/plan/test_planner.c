@@ -261,8 +261,8 @@ typedef struct run_res {
     long held_cycles;
     uint32_t fallbacks, underruns, restore_unkept;
     uint32_t ovr_later;   /* override changes the planner could not apply at once (interp.h) */
-    uint32_t ovr_retried; /* of these, applied later by lsm_interp_prepare (the planner's factor then the one asked) */
-    uint32_t ovr_tries;   /* retries lsm_interp_prepare made of a pending change (each a planner override call) */
+    uint32_t ovr_retried; /* of these, applied later by a retry (the planner's factor then the one asked) */
+    uint32_t ovr_tries;   /* retries of a pending change, by lsm_interp_prepare or the step (each a planner call) */
     uint32_t ovr_excess;  /* retries beyond the bound (interp.h: the gaps 1, 2, 4, 8, then LSM_INTERP_OVR_GAP_MAX) */
     uint32_t tick_plans, prepared;
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */

@@ -496,9 +496,17 @@ static void staircase(pctx *pc, plan5 *best)
  * two would replace the successor's), but a REPLAN takes a kept piece: the same search, which succeeded.
  * tests/plan/test_plan_memo.c runs random programs with and without the memo and compares every piece and setpoint.
  */
+/* The same input bit for bit (+0 and -0 are one value, not one input). */
 static bool same_bits(lsm_real a, lsm_real b)
 {
-    return memcmp(&a, &b, sizeof a) == 0;
+#if LSM_REAL_IS_FLOAT
+    uint32_t x, y;
+#else
+    uint64_t x, y;
+#endif
+    memcpy(&x, &a, sizeof a);
+    memcpy(&y, &b, sizeof b);
+    return x == y;
 }
 
 static void memo_ramp_put(lsm_planner_memo_ramp *m, const ramp *r)

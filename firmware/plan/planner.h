@@ -225,15 +225,15 @@ typedef struct lsm_planner_memo_ramp {
 } lsm_planner_memo_ramp;
 
 typedef struct lsm_planner_memo {
-    uint32_t id0;      /* the call: start block, offset and speed (compared bit for bit) */
+    uint32_t id0; /* the call: start block, offset and speed (compared bit for bit) */
     lsm_real off0_mm, v0_mm_s;
-    uint32_t reach;    /* the search read blocks [id0, reach) and no further (tail + 1: it met the buffer's end) */
-    uint32_t end_blk;  /* the piece: its end node, length, cruise and end speed, ramp starts and ramps */
+    uint32_t reach;   /* the search read blocks [id0, reach) and no further (tail + 1: it met the buffer's end) */
+    uint32_t end_blk; /* the piece: its end node, length, cruise and end speed, ramp starts and ramps */
     lsm_real len_mm, vc_mm_s, v1_mm_s, xa_mm, xb_mm;
     lsm_planner_memo_ramp A, B;
-    uint8_t ok;        /* it holds a piece, and no block before reach, no override, no limit changed since */
-    uint8_t step;      /* lsm_piece.step */
-    uint8_t off;       /* tests: no memo, every piece searched (tests/plan/test_plan_memo.c compares the two) */
+    uint8_t ok;   /* it holds a piece, and no block before reach, no override, no limit changed since */
+    uint8_t step; /* lsm_piece.step */
+    uint8_t off;  /* tests: no memo, every piece searched (tests/plan/test_plan_memo.c compares the two) */
     uint8_t reserved;
 } lsm_planner_memo;
 
@@ -305,7 +305,7 @@ typedef struct lsm_planner {
     lsm_real held_end[LSM_MAX_AXES];
     uint8_t held; /* held_g is held (its 3 slots are not counted free) */
     uint8_t reserved4[3];
-    uint32_t call_tail; /* the tail when the current planner call began */
+    uint32_t call_tail;    /* the tail when the current planner call began */
     lsm_planner_memo memo; /* the last piece searched (plan_piece.c) */
     lsm_planner_stats stats;
 } lsm_planner;

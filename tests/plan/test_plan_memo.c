@@ -68,7 +68,7 @@ static void run(long prog, bool memo, outcome *out)
     assert_int_equal(lsm_interp_init(&ip, &pl), LSM_OK);
     pl.memo.off = memo ? 0u : 1u;
     const int n_items = 20 + (int)(test_urand(&st) * 60.0);
-    const bool bursts = test_urand(&st) < 0.3;       /* append until full, else one item when 12 slots are free */
+    const bool bursts = test_urand(&st) < 0.3; /* append until full, else one item when 12 slots are free */
     const double p_ovr = test_urand(&st) < 0.5 ? 0.002 : 0.0, p_noprep = test_urand(&st) < 0.3 ? 0.05 : 0.0;
     const long hold_at = test_urand(&st) < 0.3 ? (long)test_uni(&st, 10, 3000) : -1;
     const long resume_at = hold_at + (long)test_uni(&st, 1, 2000);

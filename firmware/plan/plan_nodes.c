@@ -312,6 +312,12 @@ static lsm_real eroded_cap(const lsm_planner *pl, uint32_t id)
 /* ------------------------------------------------------------------------------------------------------------ */
 /* backward pass                                                                                                */
 
+void lsm_pl_changed(lsm_planner *pl, uint32_t id)
+{
+    if (id_lt(id, pl->memo.reach))
+        pl->memo.ok = 0;
+}
+
 void lsm_pl_backward_pass(lsm_planner *pl)
 {
     if (pl->tail == pl->head)

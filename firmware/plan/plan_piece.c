@@ -509,19 +509,7 @@ static bool same_bits(lsm_real a, lsm_real b)
     return x == y;
 }
 
-static void memo_ramp_put(lsm_planner_memo_ramp *m, const ramp *r)
-{
-    m->iv = r->iv;
-    m->jp_mm_s3 = r->jp;
-    m->dist_mm = r->dist;
-}
-
-static void memo_ramp_get(const lsm_planner_memo_ramp *m, ramp *r)
-{
-    r->iv = m->iv;
-    r->jp = m->jp_mm_s3;
-    r->dist = m->dist_mm;
-}
+_Static_assert(sizeof(plan5) == LSM_PLANNER_MEMO_PLAN_BYTES, "lsm_planner_memo.plan holds one plan5");
 
 static void memo_put(lsm_planner *pl, const pctx *pc, const plan5 *p, uint32_t reach)
 {
@@ -534,38 +522,22 @@ static void memo_put(lsm_planner *pl, const pctx *pc, const plan5 *p, uint32_t r
     m->reach = reach;
     m->end_blk = pc->id_end;
     m->len_mm = pc->D;
-    m->vc_mm_s = p->vc;
-    m->v1_mm_s = p->v1;
-    m->xa_mm = p->xA;
-    m->xb_mm = p->xB;
-    memo_ramp_put(&m->A, &p->A);
-    memo_ramp_put(&m->B, &p->B);
-    m->step = p->step ? 1u : 0u;
+    memcpy(m->plan, p, sizeof *p);
     m->ok = 1;
 }
 
-/* The kept piece for (id0, off0, v0) into *out (what fill_piece reads of the plan and of its pctx); false: none. */
-static bool memo_get(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, lsm_piece *out)
+/* The kept plan for (id0, off0, v0) into *p, and what fill_piece reads of its pctx into *pc; false: none. */
+static bool memo_get(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pc, plan5 *p)
 {
     const lsm_planner_memo *m = &pl->memo;
     if (!m->ok || m->off || m->id0 != id0 || !same_bits(m->off0_mm, off0) || !same_bits(m->v0_mm_s, v0))
         return false;
-    plan5 p;
-    memset(&p, 0, sizeof p);
-    p.step = m->step != 0u;
-    p.v0 = v0;
-    p.vc = m->vc_mm_s;
-    p.v1 = m->v1_mm_s;
-    p.xA = m->xa_mm;
-    p.xB = m->xb_mm;
-    memo_ramp_get(&m->A, &p.A);
-    memo_ramp_get(&m->B, &p.B);
-    pctx pc;
-    memset(&pc, 0, sizeof pc);
-    pc.id0 = id0;
-    pc.off0 = off0;
-    pc.id_end = m->end_blk;
-    fill_piece(pl, &pc, &p, m->len_mm, out);
+    memcpy(p, m->plan, sizeof *p);
+    memset(pc, 0, sizeof *pc);
+    pc->id0 = id0;
+    pc->off0 = off0;
+    pc->id_end = m->end_blk;
+    pc->D = m->len_mm;
     pl->stats.pieces_kept++;
     return true;
 }
@@ -601,18 +573,16 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
     }
     if (off0 >= blk(pl, id0)->g.len && id0 + 1u == pl->tail)
         return LSM_E_EMPTY;
-    if (memo_get(pl, id0, off0, v0, out)) {
-        pl->stats.pieces++;
-        return LSM_OK;
-    }
     pctx pc;
     plan5 best;
     uint32_t reach;
-    if (!plan_normal(pl, id0, off0, v0, &pc, &best, &reach))
-        return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+    if (!memo_get(pl, id0, off0, v0, &pc, &best)) {
+        if (!plan_normal(pl, id0, off0, v0, &pc, &best, &reach))
+            return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+        if (mode == LSM_PIECE_NORMAL)
+            memo_put(pl, &pc, &best, reach);
+    }
     fill_piece(pl, &pc, &best, pc.D, out);
-    if (mode == LSM_PIECE_NORMAL)
-        memo_put(pl, &pc, &best, reach);
     pl->stats.pieces++;
     return LSM_OK;
 }

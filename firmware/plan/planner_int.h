@@ -64,11 +64,7 @@ static inline bool id_lt(uint32_t a, uint32_t b)
 /* Block id and every block after it changed (pushed, trimmed, or its node flag or W set): the piece memo
  * (lsm_planner_memo) stays only if its search read nothing from there on. Every write to a block calls this (or
  * lsm_pl_changed_all), and so does every change of what the caps and budgets read (override, limits). */
-static inline void lsm_pl_changed(lsm_planner *pl, uint32_t id)
-{
-    if (id_lt(id, pl->memo.reach))
-        pl->memo.ok = 0;
-}
+void lsm_pl_changed(lsm_planner *pl, uint32_t id);
 
 static inline void lsm_pl_changed_all(lsm_planner *pl)
 {

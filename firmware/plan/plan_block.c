@@ -198,6 +198,7 @@ static bool lines_collinear(const lsm_geom *a, const lsm_geom *b)
 
 static void push_block(lsm_planner *pl, const lsm_geom *g, lsm_real feed, uint32_t seq, uint8_t flags)
 {
+    lsm_pl_changed(pl, pl->tail); /* (a search that met the buffer's end read up to here) */
     lsm_pblock *b = blk(pl, pl->tail);
     memset(b, 0, sizeof *b);
     b->g = *g;
@@ -275,6 +276,7 @@ LSM_NOINLINE static void try_corner(const lsm_planner *pl, const lsm_pblock *pre
 static void push_corner(lsm_planner *pl, lsm_pblock *prev, const corner_try *ct, lsm_real feed, uint32_t seq,
                         uint8_t flags)
 {
+    lsm_pl_changed(pl, pl->tail - 1u);
     prev->g = ct->g1;
     block_coef(pl, prev);
     push_block(pl, &ct->cr.trans[0], prev->feed_mm_s, seq, (uint8_t)(LSM_PB_CORNER | (prev->flags & LSM_PB_RAPID)));
@@ -372,6 +374,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
          * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
         pl->tail -= corner ? 3u : 1u;
+        lsm_pl_changed(pl, pl->tail - 1u);
         if (corner) {
             prev->g = prev_orig;
             block_coef(pl, prev);

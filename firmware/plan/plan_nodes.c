@@ -312,6 +312,12 @@ static lsm_real eroded_cap(const lsm_planner *pl, uint32_t id)
 /* ------------------------------------------------------------------------------------------------------------ */
 /* backward pass                                                                                                */
 
+void lsm_pl_changed(lsm_planner *pl, uint32_t id)
+{
+    if (id_lt(id, pl->memo.reach))
+        pl->memo.ok = 0;
+}
+
 void lsm_pl_backward_pass(lsm_planner *pl)
 {
     if (pl->tail == pl->head)
@@ -368,7 +374,8 @@ void lsm_pl_backward_pass(lsm_planner *pl)
         n_exact = (nb->flags & LSM_PB_STOP) != 0;
         if (same) {
             pl->bp_stop = node;
-            return; /* everything before is unchanged */
+            lsm_pl_changed(pl, node + 1u); /* (the node itself kept its flag and W) */
+            return;                        /* everything before is unchanged */
         }
         /* restart the detection just before the node and walk again down to k */
         vreset(&vs);
@@ -377,6 +384,7 @@ void lsm_pl_backward_pass(lsm_planner *pl)
     /* a valley still pending at the interpolator stays inside the first piece (verified pointwise there) */
     for (uint32_t q = pl->head; q != n_id; q++)
         blk(pl, q)->flags &= (uint8_t)~LSM_PB_NODE;
+    lsm_pl_changed_all(pl);
     pl->full_pass = 0;
     pl->bp_stop = pl->head;
 }
@@ -395,6 +403,7 @@ LSM_NOINLINE static void ovr_apply(lsm_planner *pl, lsm_real near, lsm_real far,
     pl->ovr_near = near;
     pl->ovr_far = far;
     pl->ovr_switch = sw;
+    lsm_pl_changed_all(pl); /* (every cap) */
     pl->full_pass = 1;
     pl->gen++;
     lsm_pl_backward_pass(pl);

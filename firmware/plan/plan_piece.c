@@ -240,7 +240,8 @@ static lsm_status fallback(lsm_planner *pl, pctx *pc, lsm_real v0, lsm_piece *ou
     return LSM_E_INTERNAL;
 }
 
-static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp);
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp,
+                        uint32_t *reach);
 
 /* Time from the piece start to x (>= the end of ramp A, <= the start of ramp B) along p. */
 static lsm_real time_to(const plan5 *p, lsm_real dt, lsm_real x)
@@ -477,6 +478,70 @@ static void staircase(pctx *pc, plan5 *best)
     }
 }
 
+/*
+ * The piece memo. The interpolator often asks for a piece it asked for before: it prepares the successor of its
+ * piece (from the piece's end), an append changes the plan (pl->gen), it re-plans the rest of its piece from a sample
+ * in the cruise (a REPLAN, taken: it ends where the piece did, at the same speed), and then prepares the successor
+ * again, from the same point at the same speed (the dense M4 benchmark: 85 of its 392 searches). The search
+ * (plan_normal) is a function of its inputs (id0, off0, v0), of the blocks it reads (geometry, feed, cap,
+ * coefficients, flags, W), of the override and the configuration, and of where the buffer ends if it meets it:
+ * nothing else (the position cursor of each pctx starts afresh, and the search keeps no state between calls). It
+ * reads no block at or after `reach` (search_reach). So while no block before reach was written, and neither the
+ * override nor the configuration changed, the same call finds the same plan, and the piece built from it
+ * (fill_piece, deterministic) is the same bit for bit. Every write to a block goes through lsm_pl_changed (a new
+ * block at the tail, the trim of the last block, the backward pass from the first node it changed on: bp_stop + 1, or
+ * all of them when it walked the whole buffer), an override change through lsm_pl_changed_all, and
+ * lsm_planner_init clears the memo; the head moving on (blocks released) changes no block still held, and a call
+ * whose start was released is refused before the memo is asked. Only NORMAL searches are kept (a REPLAN between the
+ * two would replace the successor's), but a REPLAN takes a kept piece: the same search, which succeeded.
+ * tests/plan/test_plan_memo.c runs random programs with and without the memo and compares every piece and setpoint.
+ */
+/* The same input bit for bit (+0 and -0 are one value, not one input). */
+static bool same_bits(lsm_real a, lsm_real b)
+{
+#if LSM_REAL_IS_FLOAT
+    uint32_t x, y;
+#else
+    uint64_t x, y;
+#endif
+    memcpy(&x, &a, sizeof a);
+    memcpy(&y, &b, sizeof b);
+    return x == y;
+}
+
+_Static_assert(sizeof(plan5) == LSM_PLANNER_MEMO_PLAN_BYTES, "lsm_planner_memo.plan holds one plan5");
+
+static void memo_put(lsm_planner *pl, const pctx *pc, const plan5 *p, uint32_t reach)
+{
+    lsm_planner_memo *m = &pl->memo;
+    if (m->off)
+        return;
+    m->id0 = pc->id0;
+    m->off0_mm = pc->off0;
+    m->v0_mm_s = p->v0;
+    m->reach = reach;
+    m->end_blk = pc->id_end;
+    m->len_mm = pc->D;
+    memcpy(m->plan, p, sizeof *p);
+    m->ok = 1;
+}
+
+/* The kept plan for (id0, off0, v0) into *p, and what fill_piece reads of its pctx into *pc; false: none. */
+static bool memo_get(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pc, plan5 *p)
+{
+    const lsm_planner_memo *m = &pl->memo;
+    if (!m->ok || m->off || m->id0 != id0 || !same_bits(m->off0_mm, off0) || !same_bits(m->v0_mm_s, v0))
+        return false;
+    memcpy(p, m->plan, sizeof *p);
+    memset(pc, 0, sizeof *pc);
+    pc->id0 = id0;
+    pc->off0 = off0;
+    pc->id_end = m->end_blk;
+    pc->D = m->len_mm;
+    pl->stats.pieces_kept++;
+    return true;
+}
+
 lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, lsm_piece_mode mode,
                                   lsm_piece *out)
 {
@@ -510,8 +575,13 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
         return LSM_E_EMPTY;
     pctx pc;
     plan5 best;
-    if (!plan_normal(pl, id0, off0, v0, &pc, &best))
-        return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+    uint32_t reach;
+    if (!memo_get(pl, id0, off0, v0, &pc, &best)) {
+        if (!plan_normal(pl, id0, off0, v0, &pc, &best, &reach))
+            return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
+        if (mode == LSM_PIECE_NORMAL)
+            memo_put(pl, &pc, &best, reach);
+    }
     fill_piece(pl, &pc, &best, pc.D, out);
     pl->stats.pieces++;
     return LSM_OK;
@@ -555,6 +625,7 @@ typedef struct search {
     bool have;           /* best holds a verified plan */
     lsm_real ga, gj, gs; /* budgets at the start (at rest): the distance probes */
     plan5 best, p;       /* the best plan so far, and the one being tried */
+    uint32_t far;        /* the farthest candidate node (search_reach) */
 } search;
 
 /* Forward step: the highest v1 <= w1 that one ramp from v0 reaches (then cruise). */
@@ -808,6 +879,8 @@ static bool search_pass(search *s, int pass)
         if (id_end == pl->tail || (cand > 0 && !skipped_here && (blk(pl, id_end)->flags & LSM_PB_STOP)))
             break;
         id_end = lsm_pl_node_after(pl, id_end, &s->w1);
+        if (id_lt(s->far, id_end))
+            s->far = id_end;
         lsm_pl_pctx_init(&s->pc, pl, s->id0, s->off0, id_end);
         skipped_here = false;
         if (!(s->pc.D > LEN_EPS * (R1 + s->pc.D)) && id_end != pl->tail) {
@@ -848,14 +921,33 @@ static void slow_cruise_step(search *s)
         b->step = true;
 }
 
+/* One past the last block the search read (the piece memo): every piece it tried ends at a candidate node, read with
+ * the blocks before it (lsm_pl_node_after, the pctx of the piece); lsm_pl_arrival_ok at a candidate reads on to the
+ * node after it (its flags and W, the blocks between). The farthest candidate bounds both (the node after an
+ * earlier candidate is a later candidate), unless it is a stop or the tail, where lsm_pl_arrival_ok reads nothing
+ * further. If the tail is read (compared with), reach is tail + 1: the next block pushed changes the search. */
+static uint32_t search_reach(const search *s)
+{
+    const lsm_planner *pl = s->pl;
+    uint32_t r = s->far;
+    if (r != pl->tail && !(blk(pl, r)->flags & LSM_PB_STOP)) {
+        lsm_real w;
+        r = lsm_pl_node_after(pl, r, &w);
+    }
+    return r + 1u;
+}
+
 /* The NORMAL piece from (id0, off0) at v0 (a = 0): true and the plan, or false (pc: the last piece tried). Pass 1
- * (only if pass 0 found nothing and skipped a short piece) also stops at the close valley node. */
-static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp)
+ * (only if pass 0 found nothing and skipped a short piece) also stops at the close valley node. reach (if not NULL):
+ * search_reach. */
+static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, pctx *pcp, plan5 *bestp,
+                        uint32_t *reach)
 {
     search s;
     memset(&s, 0, sizeof s);
     s.pl = pl;
     s.id0 = id0;
+    s.far = id0;
     s.off0 = off0;
     s.v0 = v0;
     const bool skipped_short = search_pass(&s, 0);
@@ -868,6 +960,8 @@ static bool plan_normal(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v
     *pcp = s.pc;
     if (s.have)
         *bestp = s.best;
+    if (reach != NULL)
+        *reach = search_reach(&s);
     return s.have;
 }
 
@@ -891,5 +985,5 @@ bool lsm_pl_horizon_feasible(lsm_planner *pl, bool force)
         return false; /* moving at the very end of the buffer */
     pctx pc;
     plan5 p;
-    return plan_normal(pl, id, off, pl->horizon_v, &pc, &p);
+    return plan_normal(pl, id, off, pl->horizon_v, &pc, &p, NULL);
 }

@@ -212,7 +212,25 @@ typedef struct lsm_planner_stats {
     uint32_t restore_unkept; /* plans restored after a change the machine could not follow (an override change
                                 undone, a junction made an exact stop) that still do not keep its commitment (should
                                 stay 0) */
+    uint32_t pieces_kept;    /* of pieces: the memo's (lsm_planner_memo), no search */
 } lsm_planner_stats;
+
+/* The last piece the forward search found for lsm_planner_plan_piece (mode NORMAL), kept to answer the same call again
+ * while nothing the search read has changed (plan_piece.c, "The piece memo"): the call, how far the search read, the
+ * piece's end and length, and the plan the piece is built from (plan_piece.c's private plan5, copied as bytes: one
+ * copy each way; plan_piece.c checks the size). */
+#define LSM_PLANNER_MEMO_PLAN_BYTES (sizeof(lsm_real) == 4u ? 108u : 200u)
+typedef struct lsm_planner_memo {
+    uint32_t id0; /* the call: start block, offset and speed (compared bit for bit) */
+    lsm_real off0_mm, v0_mm_s;
+    uint32_t reach;   /* the search read blocks [id0, reach) and no further (tail + 1: it met the buffer's end) */
+    uint32_t end_blk; /* the piece's end node and length */
+    lsm_real len_mm;
+    uint8_t plan[LSM_PLANNER_MEMO_PLAN_BYTES];
+    uint8_t ok;  /* it holds a piece, and no block before reach, no override, no limit changed since */
+    uint8_t off; /* tests: no memo, every piece searched (tests/plan/test_plan_memo.c compares the two) */
+    uint8_t reserved[2];
+} lsm_planner_memo;
 
 /* The requests of the control cycle (interp.c's lsm_interp_step, the tick) to the planner, which belongs to the
  * background: the tick is done with the blocks before release_blk (their slots may be reused), its commitment
@@ -282,7 +300,8 @@ typedef struct lsm_planner {
     lsm_real held_end[LSM_MAX_AXES];
     uint8_t held; /* held_g is held (its 3 slots are not counted free) */
     uint8_t reserved4[3];
-    uint32_t call_tail; /* the tail when the current planner call began */
+    uint32_t call_tail;    /* the tail when the current planner call began */
+    lsm_planner_memo memo; /* the last piece searched (plan_piece.c) */
     lsm_planner_stats stats;
 } lsm_planner;
 

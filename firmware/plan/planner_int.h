@@ -61,6 +61,16 @@ static inline bool id_lt(uint32_t a, uint32_t b)
     return (int32_t)(a - b) < 0;
 }
 
+/* Block id and every block after it changed (pushed, trimmed, or its node flag or W set): the piece memo
+ * (lsm_planner_memo) stays only if its search read nothing from there on. Every write to a block calls this (or
+ * lsm_pl_changed_all), and so does every change of what the caps and budgets read (override, limits). */
+void lsm_pl_changed(lsm_planner *pl, uint32_t id);
+
+static inline void lsm_pl_changed_all(lsm_planner *pl)
+{
+    pl->memo.ok = 0;
+}
+
 /* ---- the six budget coefficients of a block (planner.h, "Limits"), stored as bfloat16 rounded up ---- */
 
 typedef struct coef {

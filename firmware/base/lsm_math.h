@@ -95,9 +95,7 @@ void lsm_math_sincosf(float x, float *s_out, float *c_out);
 static inline void lsm_sincos(lsm_real x, lsm_real *s, lsm_real *c)
 {
 #if LSM_REAL_IS_FLOAT
-    const lsm_math_sc o = lsm_math_sincos_pairf(x);
-    *s = o.s;
-    *c = o.c;
+    lsm_math_sincosf(x, s, c);
 #else
     *s = sin(x);
     *c = cos(x);

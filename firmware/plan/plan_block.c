@@ -163,12 +163,9 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
             gj = lsm_max2(gj, q3max / cf->path_j_max_mm_s3);
         }
     }
-    b->coef[0] = bf16_up(aa);
-    b->coef[1] = bf16_up(ba);
-    b->coef[2] = bf16_up(aj);
-    b->coef[3] = bf16_up(bj);
-    b->coef[4] = bf16_up(gj);
-    b->coef[5] = bf16_up(as);
+    const lsm_real co[6] = {aa, ba, aj, bj, gj, as}; /* (in the order of b->coef) */
+    for (int i = 0; i < 6; i++)
+        b->coef[i] = bf16_up(co[i]);
     /* the cap uses the rounded coefficients, so the budget at the cap is never negative */
     coef c;
     coef_get(b, &c);

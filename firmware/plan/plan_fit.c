@@ -122,7 +122,7 @@ static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
     if (prev->g.kind != LSM_GEOM_LINE)
         return false;
     const lsm_real *d = prev->g.u.line.dir;
-    const lsm_real dn = d[0] * fr->normal[0] + d[1] * fr->normal[1] + d[2] * fr->normal[2];
+    const lsm_real dn = lsm_dot3(d, fr->normal);
     return lsm_fabs(dn) <= PLANE_DOT_TOL;
 }
 

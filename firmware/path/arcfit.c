@@ -66,8 +66,8 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, const 
 }
 
 /* The line p0 -> qe as the fit, if it fits within tol. */
-LSM_NOINLINE static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6, lsm_geom *g,
-                         lsm_arcfit_result *res)
+LSM_NOINLINE static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6,
+                                      lsm_geom *g, lsm_arcfit_result *res)
 {
     if (!(line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK))
         return false;

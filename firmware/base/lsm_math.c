@@ -151,3 +151,10 @@ float lsm_math_atan2f(float y, float x)
         t = 2 * PIO2_F - t;
     return y < 0 ? -t : t;
 }
+
+LSM_NOINLINE int lsm_check_finite(lsm_real x)
+{
+    if (x - x == LSM_R(0.0)) /* x - x is 0 for every finite x, NaN for NaN and +-inf: one test, no constant */
+        return 0;
+    return x != x ? -2 /* LSM_E_NAN */ : -3 /* LSM_E_INF */;
+}

@@ -75,13 +75,9 @@ float lsm_math_cosf(float x);
 float lsm_math_cbrtf(float x);
 float lsm_math_atan2f(float y, float x);
 
-/* 0 if x is finite, else LSM_E_NAN / LSM_E_INF (as int, to keep this header free of status.h). */
-static inline int lsm_check_finite(lsm_real x)
-{
-    if (x - x == LSM_R(0.0)) /* x - x is 0 for every finite x, NaN for NaN and +-inf: one test, no constant */
-        return 0;
-    return x != x ? -2 /* LSM_E_NAN */ : -3 /* LSM_E_INF */;
-}
+/* 0 if x is finite, else LSM_E_NAN / LSM_E_INF (as int, to keep this header free of status.h); lsm_math.c, out of line:
+ * one copy for the core. */
+int lsm_check_finite(lsm_real x);
 
 /* a . b of 3-vectors (inline: it sits in the arc fit's per-point loops). */
 static inline lsm_real lsm_dot3(const lsm_real a[3], const lsm_real b[3])
@@ -99,9 +95,7 @@ void lsm_math_sincosf(float x, float *s_out, float *c_out);
 static inline void lsm_sincos(lsm_real x, lsm_real *s, lsm_real *c)
 {
 #if LSM_REAL_IS_FLOAT
-    const lsm_math_sc o = lsm_math_sincos_pairf(x);
-    *s = o.s;
-    *c = o.c;
+    lsm_math_sincosf(x, s, c);
 #else
     *s = sin(x);
     *c = cos(x);

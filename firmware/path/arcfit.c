@@ -66,8 +66,8 @@ static bool fit_line(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, const 
 }
 
 /* The line p0 -> qe as the fit, if it fits within tol. */
-static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6, lsm_geom *g,
-                         lsm_arcfit_result *res)
+LSM_NOINLINE static bool af_take_line(bool line_ok, lsm_real lerr, lsm_real tol, const lsm_real *a6, const lsm_real *b6,
+                                      lsm_geom *g, lsm_arcfit_result *res)
 {
     if (!(line_ok && lerr <= tol && lsm_geom_line_init(g, a6, b6) == LSM_OK))
         return false;
@@ -316,13 +316,8 @@ bool lsm_arcfit_fit(const lsm_real p0[3], const lsm_arcfit_pt *q, int n, lsm_rea
         res->end_mm[i] = le[i];
     if (line_only)
         return af_take_line(line_ok, lerr, tol, a6, b6, g, res);
-    if (line_ok && (lerr <= tol * AF_LINE_PREFER || n < 2)) {
-        if (lerr > tol || lsm_geom_line_init(g, a6, b6) != LSM_OK)
-            return false;
-        res->kind = LSM_ARCFIT_LINE;
-        res->err_mm = lerr;
-        return true;
-    }
+    if (line_ok && (lerr <= tol * AF_LINE_PREFER || n < 2))
+        return af_take_line(line_ok, lerr, tol, a6, b6, g, res);
     if (n < 2)
         return false;
     /* chord p0 -> qe (both kept exactly), its direction u, the plane nh, v across the chord in the plane */

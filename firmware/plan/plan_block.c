@@ -58,6 +58,8 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
     const lsm_real *e1, *e2;
     lsm_real t0, t1, k, c = R0, sT = R1; /* sT: in-plane speed per unit s (helix) */
     lsm_real n[3] = {R0, R0, R0}, ax = R0;
+    lsm_real q3n = R0, q3t; /* q3 = q3n mN + q3t mT */
+    bool arc = false;
     if (g->kind == LSM_GEOM_ARC) {
         const lsm_geom_arc *a = &g->u.arc;
         e1 = a->e1;
@@ -72,46 +74,44 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         lsm_cross3(e1, e2, n);
         ax = a->axial_mm / g->len;
         /* q_s = sT (-sin phi e1 + cos phi e2) sgn + n ax; q_ss = -k (cos phi e1 + sin phi e2);
-         * q_sss = k |w| (sin phi e1 - cos phi e2) sgn */
-        for (int i = 0; i < 3; i++) {
-            const lsm_real mT = max_abs_cs(e2[i], -e1[i], t0, t1); /* |-sin e1 + cos e2| */
-            const lsm_real mN = max_abs_cs(e1[i], e2[i], t0, t1);  /* |cos e1 + sin e2| */
-            q1[i] = sT * mT + lsm_fabs(n[i] * ax);
-            q2[i] = k * mN;
-            q3[i] = k * lsm_fabs(w) * mT;
+         * q_sss = k |w| (sin phi e1 - cos phi e2) sgn: mT = |-sin e1 + cos e2|, mN = |cos e1 + sin e2| below */
+        arc = true;
+        q3t = k * lsm_fabs(w);
+        *q3max = q3t;
+    } else {
+        /* clothoid: theta(s) = theta0 + k0 s + c s²/2; T = cos e1 + sin e2, N = -sin e1 + cos e2 */
+        const lsm_geom_clothoid *cl = &g->u.clo;
+        e1 = cl->e1;
+        e2 = cl->e2;
+        const lsm_real L = g->len, k0 = cl->kappa0_per_mm;
+        c = cl->c_per_mm2;
+        const lsm_real th0 = cl->theta0_rad, thL = th0 + L * (k0 + LSM_R(0.5) * c * L);
+        t0 = lsm_min2(th0, thL);
+        t1 = lsm_max2(th0, thL);
+        if (c != R0) {
+            const lsm_real sv = -k0 / c;
+            if (sv > R0 && sv < L) {
+                const lsm_real thv = th0 + sv * (k0 + LSM_R(0.5) * c * sv);
+                t0 = lsm_min2(t0, thv);
+                t1 = lsm_max2(t1, thv);
+            }
         }
-        *kmax = k;
-        *q3max = k * lsm_fabs(w);
-        return;
+        k = lsm_max2(lsm_fabs(k0), lsm_fabs(k0 + c * L));
+        q3n = lsm_fabs(c);
+        q3t = k * k;
+        *q3max = lsm_sqrt(c * c + k * k * k * k);
     }
-    /* clothoid: theta(s) = theta0 + k0 s + c s²/2; T = cos e1 + sin e2, N = -sin e1 + cos e2 */
-    const lsm_geom_clothoid *cl = &g->u.clo;
-    e1 = cl->e1;
-    e2 = cl->e2;
-    const lsm_real L = g->len, k0 = cl->kappa0_per_mm;
-    c = cl->c_per_mm2;
-    const lsm_real th0 = cl->theta0_rad, thL = th0 + L * (k0 + LSM_R(0.5) * c * L);
-    t0 = lsm_min2(th0, thL);
-    t1 = lsm_max2(th0, thL);
-    if (c != R0) {
-        const lsm_real sv = -k0 / c;
-        if (sv > R0 && sv < L) {
-            const lsm_real thv = th0 + sv * (k0 + LSM_R(0.5) * c * sv);
-            t0 = lsm_min2(t0, thv);
-            t1 = lsm_max2(t1, thv);
-        }
-    }
-    k = lsm_max2(lsm_fabs(k0), lsm_fabs(k0 + c * L));
+    /* one loop for both: an arc's q1 adds |n ax| (a clothoid's n and ax are 0, sT 1: + 0 and * 1 are exact), its q3
+     * has no mN term (q3n = 0, + 0 exact) */
     for (int i = 0; i < 3; i++) {
-        const lsm_real mT = max_abs_cs(e1[i], e2[i], t0, t1);
-        const lsm_real mN = max_abs_cs(e2[i], -e1[i], t0, t1);
-        q1[i] = mT;
+        const lsm_real mu = max_abs_cs(e1[i], e2[i], t0, t1);  /* |cos e1 + sin e2| */
+        const lsm_real mv = max_abs_cs(e2[i], -e1[i], t0, t1); /* |-sin e1 + cos e2| */
+        const lsm_real mT = arc ? mv : mu, mN = arc ? mu : mv;
+        q1[i] = sT * mT + lsm_fabs(n[i] * ax);
         q2[i] = k * mN;
-        q3[i] = lsm_fabs(c) * mN + k * k * mT;
+        q3[i] = q3n * mN + q3t * mT;
     }
     *kmax = k;
-    *q3max = lsm_sqrt(c * c + k * k * k * k);
-    (void)sT;
 }
 
 /* bfloat16 (the upper half of an IEEE float), rounded up: the coefficients are bounds, never smaller. */
@@ -163,12 +163,9 @@ static void block_coef(const lsm_planner *pl, lsm_pblock *b)
             gj = lsm_max2(gj, q3max / cf->path_j_max_mm_s3);
         }
     }
-    b->coef[0] = bf16_up(aa);
-    b->coef[1] = bf16_up(ba);
-    b->coef[2] = bf16_up(aj);
-    b->coef[3] = bf16_up(bj);
-    b->coef[4] = bf16_up(gj);
-    b->coef[5] = bf16_up(as);
+    const lsm_real co[6] = {aa, ba, aj, bj, gj, as}; /* (in the order of b->coef) */
+    for (int i = 0; i < 6; i++)
+        b->coef[i] = bf16_up(co[i]);
     /* the cap uses the rounded coefficients, so the budget at the cap is never negative */
     coef c;
     coef_get(b, &c);

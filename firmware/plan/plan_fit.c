@@ -53,11 +53,11 @@ static bool vertex_limits(const lsm_planner *pl, const lsm_real *prev, const lsm
         u[k] = a[k] - prev[k];
         w[k] = b[k] - a[k];
     }
-    const lsm_real h1 = lsm_sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-    const lsm_real h2 = lsm_sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    const lsm_real h1 = lsm_sqrt(lsm_dot3(u, u));
+    const lsm_real h2 = lsm_sqrt(lsm_dot3(w, w));
     if (!(h1 > R0 && h2 > R0))
         return false;
-    lsm_real cs = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (h1 * h2);
+    lsm_real cs = lsm_dot3(u, w) / (h1 * h2);
     cs = lsm_min2(R1, lsm_max2(-R1, cs));
     const lsm_real delta = lsm_atan2(lsm_sqrt(lsm_max2(R0, R1 - cs * cs)), cs);
     return vertex_speed(pl, h1, h2, delta, eps) < feed;
@@ -122,7 +122,7 @@ static bool arc_fits_tail(const lsm_planner *pl, const lsm_arcfit_result *fr)
     if (prev->g.kind != LSM_GEOM_LINE)
         return false;
     const lsm_real *d = prev->g.u.line.dir;
-    const lsm_real dn = d[0] * fr->normal[0] + d[1] * fr->normal[1] + d[2] * fr->normal[2];
+    const lsm_real dn = lsm_dot3(d, fr->normal);
     return lsm_fabs(dn) <= PLANE_DOT_TOL;
 }
 

@@ -511,14 +511,16 @@ static bool same_bits(lsm_real a, lsm_real b)
 
 _Static_assert(sizeof(plan5) == LSM_PLANNER_MEMO_PLAN_BYTES, "lsm_planner_memo.plan holds one plan5");
 
-static void memo_put(lsm_planner *pl, const pctx *pc, const plan5 *p, uint32_t reach)
+/* Keeps the plan p the search found for the call (id0, off0, v0), keyed on the call itself. */
+static void memo_put(lsm_planner *pl, uint32_t id0, lsm_real off0, lsm_real v0, const pctx *pc, const plan5 *p,
+                     uint32_t reach)
 {
     lsm_planner_memo *m = &pl->memo;
     if (m->off)
         return;
-    m->id0 = pc->id0;
-    m->off0_mm = pc->off0;
-    m->v0_mm_s = p->v0;
+    m->id0 = id0;
+    m->off0_mm = off0;
+    m->v0_mm_s = v0;
     m->reach = reach;
     m->end_blk = pc->id_end;
     m->len_mm = pc->D;
@@ -580,7 +582,7 @@ lsm_status lsm_planner_plan_piece(lsm_planner *pl, uint32_t id0, lsm_real off0, 
         if (!plan_normal(pl, id0, off0, v0, &pc, &best, &reach))
             return mode == LSM_PIECE_REPLAN ? LSM_E_INFEASIBLE : fallback(pl, &pc, v0, out);
         if (mode == LSM_PIECE_NORMAL)
-            memo_put(pl, &pc, &best, reach);
+            memo_put(pl, id0, off0, v0, &pc, &best, reach);
     }
     fill_piece(pl, &pc, &best, pc.D, out);
     pl->stats.pieces++;

@@ -670,7 +670,9 @@ static uint8_t tick_cause(const lsm_interp *ip, uint8_t hint)
 
 /* A change of the override the planner could not apply (lsm_interp_set_override), tried again once the machine has run
  * ovr_gap new pieces since the last try; the gap doubles after each try that fails, up to LSM_INTERP_OVR_GAP_MAX.
- * Called by lsm_interp_prepare, and without it by the step before it plans a piece (piece_for). */
+ * Called first by lsm_interp_prepare, and without it first by the step, before either finds its switch point: a change
+ * applied between finding the point and planning its piece would plan that piece from a point of the plan before it
+ * (setpoint jumps and stalls, found by test_planner_undo's retries without lsm_interp_prepare). */
 static void retry_override(lsm_interp *ip)
 {
     if (!ip->ovr_retry || ip->ovr_zero || ip->serial - ip->ovr_try_serial < ip->ovr_gap)
@@ -682,8 +684,7 @@ static void retry_override(lsm_interp *ip)
         ip->ovr_gap = (uint8_t)(ip->ovr_gap * 2u);
 }
 
-/* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. Without
- * lsm_interp_prepare (the step is the background too) a pending override is retried here, before the piece. */
+/* The prepared piece for switch point w, planning it now if it is not there (counted); NULL if none fits. */
 static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t hint)
 {
     lsm_interp_prep *q = &ip->prep;
@@ -697,8 +698,6 @@ static const lsm_interp_prep *piece_for(lsm_interp *ip, const swpt *w, uint8_t h
         return NULL; /* failed in the background, which prepared the piece after it */
     ip->tick_plans++;
     ip->tick_cause[tick_cause(ip, hint)]++;
-    if (!ip->bg)
-        retry_override(ip);
     return plan_switch(ip, w) == LSM_OK ? q : NULL;
 }
 
@@ -1089,6 +1088,8 @@ lsm_interp_state lsm_interp_step(lsm_interp *ip, lsm_real pos[LSM_MAX_AXES])
     lsm_planner *pl = ip->pl;
     const lsm_real dt = pl->cfg.cycle_s;
     ip->cycles++;
+    if (!ip->bg)
+        retry_override(ip); /* without lsm_interp_prepare the step is the background too */
     if (!ip->running) {
         /* at rest or between pieces: start when there is something to do */
         bool go = false;

@@ -473,11 +473,32 @@ static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_r
  * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
  * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
  * cursor: blocks beyond it back at `keep`), the previous state stays. */
+#ifdef LSM_TEST_OVR_UNDO
+/* Fault injection, in test builds only (tests/plan, test_planner_undo): the next lsm_test_ovr_undo_left switch searches
+ * fail as if no switch had been verified, so that the undo and its restore run on any path (the real failure is rarer
+ * than 1 in 140,000 random override cases). The trials still run and change the plan before the restore, as they do
+ * when they really fail. */
+extern unsigned lsm_test_ovr_undo_left;
+static bool ovr_fail_injected(void)
+{
+    if (lsm_test_ovr_undo_left == 0u)
+        return false;
+    lsm_test_ovr_undo_left--;
+    return true;
+}
+#else
+static bool ovr_fail_injected(void)
+{
+    return false;
+}
+#endif
+
 static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
 {
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
     const lsm_real keep = ovr_of(pl, cur);
+    const bool fail = ovr_fail_injected();
     lsm_real need = ovr_need(pl, cur, v_now);
     for (int tries = 0; tries < OVR_TRIES; tries++) {
         uint32_t id = cur;
@@ -489,7 +510,7 @@ static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_rea
         if (id == pl->tail)
             break;
         ovr_apply(pl, keep, f, id);
-        if (lsm_pl_horizon_feasible(pl, false)) {
+        if (lsm_pl_horizon_feasible(pl, false) && !fail) {
             if (!lsm_pl_commitment_kept(pl))
                 lsm_pl_mark_stale(pl); /* (a verified piece from the horizon: just checked) */
             return true;
@@ -497,7 +518,7 @@ static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_rea
         need = OVR_NEED_SCALE * need + blk(pl, cur)->g.len;
     }
     ovr_apply(pl, keep, f, pl->tail);
-    if (lsm_pl_commitment_ok(pl))
+    if (lsm_pl_commitment_ok(pl) && !fail)
         return true;
     ovr_restore(pl, seed, near0, far0, sw0); /* the plan the machine runs on, as it was */
     return false;

@@ -273,6 +273,8 @@ typedef struct run_res {
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
     unsigned undone;       /* of run_opts.undo_searches, the searches that were failed (the others never came) */
     unsigned undo_lowered; /* nodes whose W an undone change lowered (node_ws_lowered) */
+    int undo_superseded;   /* another change was asked after the undone one */
+    uint32_t undo_pieces;  /* new pieces from the undone change on */
 } run_res;
 
 #ifdef LSM_TEST_OVR_UNDO
@@ -466,6 +468,9 @@ static void run(const prog *p, const run_opts *o, run_res *r)
     const long max_cycles = (long)(600.0 / CYCLE);
     int was_idle = 0;
     uint32_t ep_tries = 0, ep_serial = 0; /* the pending change's retries and the piece it was asked at */
+#ifdef LSM_TEST_OVR_UNDO
+    uint32_t undo_serial = UINT32_MAX; /* the piece an undone change was asked at (none yet) */
+#endif
     for (long k = 0; k < max_cycles; k++) {
         if (!fin) {
             if (o->feed_every > 0) {
@@ -504,8 +509,12 @@ static void run(const prog *p, const run_opts *o, run_res *r)
                 assert_int_equal(lsm_interp_set_override(&ip, (lsm_real)o->ovr_val[i]), LSM_OK);
 #ifdef LSM_TEST_OVR_UNDO
                 node_ws_take(&pl, &after);
-                if (lsm_test_ovr_undo_left != left)
+                r->undo_superseded |= undo_serial != UINT32_MAX;
+                if (lsm_test_ovr_undo_left != left) {
                     r->undo_lowered += node_ws_lowered(&before, &after);
+                    undo_serial = ip.serial;
+                    r->undo_superseded = 0;
+                }
 #endif
                 ep_tries = 0;
                 ep_serial = ip.serial;
@@ -550,6 +559,7 @@ static void run(const prog *p, const run_opts *o, run_res *r)
 #ifdef LSM_TEST_OVR_UNDO
     r->undone = o->undo_searches - lsm_test_ovr_undo_left;
     lsm_test_ovr_undo_left = 0;
+    r->undo_pieces = undo_serial != UINT32_MAX ? ip.serial - undo_serial : 0u;
 #endif
     r->ovr_later = ip.ovr_later;
     r->tick_plans = ip.tick_plans;
@@ -853,6 +863,10 @@ static void scenario_undo(const char *name, int mode)
             fail_msg("%s %ld (seed %lu): a search failed, no change undone", name, c, g_seed);
         if (r.undo_lowered)
             fail_msg("%s %ld (seed %lu): an undone change lowered the W of %u nodes", name, c, g_seed, r.undo_lowered);
+        /* a change undone and never superseded is retried once a new piece has started (interp.h) */
+        if (r.undone && !r.undo_superseded && r.undo_pieces > 0u && r.ovr_tries == 0u)
+            fail_msg("%s %ld (seed %lu): an undone change never retried (%u new pieces)", name, c, g_seed,
+                     r.undo_pieces);
         undone += r.undone ? 1 : 0;
         applied += r.undone && r.ovr_retried ? 1 : 0;
         ok++;

@@ -247,7 +247,8 @@ void lsm_interp_resume(lsm_interp *ip);
  * another factor replaces it, by lsm_interp_prepare (without it: by the step, first, before it looks for its next
  * piece): after the next new piece, then after 2, 4, ... new pieces, at most LSM_INTERP_OVR_GAP_MAX apart, so that a
  * change that stays pending costs at most one planner override call (up to 8 backward passes) per
- * LSM_INTERP_OVR_GAP_MAX pieces, not one per piece. ovr_later counts these changes. Errors: LSM_E_NULL, LSM_E_NAN, LSM_E_PL_OVERRIDE. Background. */
+ * LSM_INTERP_OVR_GAP_MAX pieces, not one per piece. ovr_later counts these changes. Errors: LSM_E_NULL, LSM_E_NAN,
+ * LSM_E_PL_OVERRIDE. Background. */
 #define LSM_INTERP_OVR_GAP_MAX 16u
 
 lsm_status lsm_interp_set_override(lsm_interp *ip, lsm_real factor);

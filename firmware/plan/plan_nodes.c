@@ -465,14 +465,6 @@ static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_r
         pl->stats.restore_unkept++;
 }
 
-/* The new factor f from a switch block on, beyond the stopping-scale distance from v_now (further out until a verified
- * piece starts at the interpolator's commitment point), the factor in force at the cursor (`keep`) before it: nothing
- * the machine is committed to changes. A factor raised where the piece ends may lower W there too (feasibility is not
- * monotone in the caps: node_w), so the blocks before the switch keep the factor they had, not the larger one (a
- * decrease from 95.6 % to 55.8 % raised them to 100 %, the current piece's end speed was no longer one from which the
- * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
- * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
- * cursor: blocks beyond it back at `keep`), the previous state stays. */
 #ifdef LSM_TEST_OVR_UNDO
 /* Fault injection, in test builds only (tests/plan, test_planner_undo): the next lsm_test_ovr_undo_left switch searches
  * fail as if no switch had been verified, so that the undo and its restore run on any path (the real failure is rarer
@@ -493,6 +485,14 @@ static bool ovr_fail_injected(void)
 }
 #endif
 
+/* The new factor f from a switch block on, beyond the stopping-scale distance from v_now (further out until a verified
+ * piece starts at the interpolator's commitment point), the factor in force at the cursor (`keep`) before it: nothing
+ * the machine is committed to changes. A factor raised where the piece ends may lower W there too (feasibility is not
+ * monotone in the caps: node_w), so the blocks before the switch keep the factor they had, not the larger one (a
+ * decrease from 95.6 % to 55.8 % raised them to 100 %, the current piece's end speed was no longer one from which the
+ * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
+ * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
+ * cursor: blocks beyond it back at `keep`), the previous state stays. */
 static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
 {
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;

@@ -83,6 +83,7 @@ npass=$(grep -c '^PASS' "$out/results.txt"); nfail=$(grep -c '^FAIL' "$out/resul
   for v in "${variants[@]}"; do
     name=double; [ -n "$v" ] && name=float
     for p in test_scurve_props test_planner test_planner_undo; do
+      [ "$p" = test_planner_undo ] && [ "$undo" -eq 0 ] && continue
       c=$(awk -v p="$p$v" '$1=="PASS" && $2==p {s+=$4} END {print s+0}' "$out/results.txt")
       f=$(awk -v p="$p$v" '$1=="FAIL" && $2==p {n++} END {print n+0}' "$out/results.txt")
       if [ "$p" = test_scurve_props ]; then
@@ -91,7 +92,6 @@ npass=$(grep -c '^PASS' "$out/results.txt"); nfail=$(grep -c '^FAIL' "$out/resul
       else
         progs=$(cat "$out"/$p$v-*.log 2>/dev/null | grep -oE ": [0-9]+ programs" | grep -oE "[0-9]+" | awk '{s+=$1} END {print s+0}')
         k=12; [ "$p" = test_planner_undo ] && k=3
-        [ "$p" = test_planner_undo ] && [ "$undo" -eq 0 ] && continue
         echo "  $name: $progs random paths passed ($p: count $c x $k scenarios), $f failing chunks"
       fi
     done

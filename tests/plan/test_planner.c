@@ -271,26 +271,30 @@ typedef struct run_res {
     uint32_t ovr_excess;  /* retries beyond the bound (interp.h: the gaps 1, 2, 4, 8, then LSM_INTERP_OVR_GAP_MAX) */
     uint32_t tick_plans, prepared;
     uint32_t tick_cause[LSM_INTERP_TP_CAUSES]; /* tick_plans by cause (interp.h) */
+#ifdef LSM_TEST_OVR_UNDO
     unsigned undone;       /* of run_opts.undo_searches, the searches that were failed (the others never came) */
     unsigned undo_lowered; /* nodes whose W an undone change lowered (node_ws_lowered) */
     int undo_superseded;   /* another change was asked after the undone one */
     uint32_t undo_pieces;  /* new pieces from the undone change on */
+#endif
 } run_res;
 
 #ifdef LSM_TEST_OVR_UNDO
 unsigned lsm_test_ovr_undo_left; /* plan_nodes.c's fault injection: switch searches still to fail */
 
-/* The W of every node from the end of the interpolator's current piece on (planner.h: horizon_end), as a list. */
+/* The W of every node from the end of the interpolator's current piece on (planner.h: horizon_end), as a list; at
+ * most NODE_WS_MAX, twice the largest look-ahead the scenarios use (256 blocks). */
+#define NODE_WS_MAX 512u
 typedef struct node_ws {
     uint32_t n;
-    uint32_t id[512];
-    double w[512];
+    uint32_t id[NODE_WS_MAX];
+    double w[NODE_WS_MAX];
 } node_ws;
 
 static void node_ws_take(const lsm_planner *pl, node_ws *s)
 {
     s->n = 0;
-    for (uint32_t id = pl->head; id != pl->tail && s->n < 512u; id++) {
+    for (uint32_t id = pl->head; id != pl->tail && s->n < NODE_WS_MAX; id++) {
         const lsm_pblock *b = lsm_planner_block(pl, id);
         if (b != NULL && (int32_t)(id - pl->horizon_end) >= 0 && (b->flags & LSM_PB_NODE)) {
             s->id[s->n] = id;
@@ -842,9 +846,9 @@ static void run_replay(const prog *p, const run_opts *o, long index, const char 
  * restore_unkept) and plan no piece in the cycle but as the scenario allows; the change is counted as undone
  * (ovr_later) and applied later by a retry unless a later change or the end of the program comes first; and the undo
  * lowers no node's W from the current piece's end on (node_ws_lowered: without ovr_seed's W put back, case 0 already
- * fails, 73 of 866 undos of seed 1 count 300 in double; with it none). It found
- * the retry of the step without lsm_interp_prepare planning its piece from a switch point found before the change
- * (interp.c, retry_override: setpoint jumps and stalls in 1 of ~100 cases). */
+ * fails, 73 of 866 undos of seed 1 count 300 in double; with it none). It found the retry of the step without
+ * lsm_interp_prepare planning its piece from a switch point found before the change (interp.c, retry_override:
+ * setpoint jumps and stalls in 1 of ~100 cases). */
 static void scenario_undo(const char *name, int mode)
 {
     uint64_t rs = rng(2 * 131 + mode);
@@ -908,7 +912,8 @@ static void test_override_restore(void **state)
     print_message("override undone (seed 30028): %u later, %u retries, %u applied\n", r.ovr_later, r.ovr_tries,
                   r.ovr_retried);
     free(r.q);
-    /* the same without lsm_interp_prepare (a synchronous loop): the step retries it first, before it looks for its next piece */
+    /* the same without lsm_interp_prepare (a synchronous loop): the step retries it first, before it looks for its
+     * next piece */
     static prog p;
     run_opts o;
     draw_replay(30028, 2, 2, 9, &p, &o);
@@ -918,7 +923,6 @@ static void test_override_restore(void **state)
     assert_true(r.ovr_retried >= 1);
     free(r.q);
 }
-
 #endif
 
 /* Regression (path soak, double build, seed 22514, "override (no prepare)" case 6): an override change raised the

@@ -10,6 +10,9 @@
 /* The coefficients are scaled up by this before rounding to bfloat16 (a bound, never smaller than the exact value,
  * even after the double -> float conversion). */
 #define BF16_PRE_SCALE ((lsm_real)1.000001)
+/* The direction range of a clothoid's q_sss (clothoid_psi) is widened by this many eps of the angles' size: the
+ * rounding of atan2 (a few ulp) and of the sums. */
+#define PSI_SLACK_EPS LSM_R(64.0)
 /* cap_geo is lowered by this many eps, so that the budget at the cap is never negative through rounding. */
 #define CAP_GEO_EPS LSM_R(4.0)
 /* Two lines are collinear when their unit directions differ by less than this (squared): rounding of dir only. */
@@ -43,6 +46,26 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
 
+/* The range [*plo, *phi] of the direction psi of a clothoid's q_sss = c N - kappa² T in its plane (psi = theta +
+ * alpha, alpha = atan2(c, -kappa²)): theta over [t0, t1], kappa from k0 to k1 (kappa² from 0 where it changes sign).
+ * alpha is monotone in kappa² (from +-pi/2 at kappa = 0 towards +-pi), so its range is that of its ends; c = 0 gives
+ * alpha = pi (q_sss = -kappa² T). Widened by PSI_SLACK_EPS eps of the angles' size for the rounding of atan2 and of
+ * the sums. */
+static void clothoid_psi(lsm_real k0, lsm_real k1, lsm_real c, lsm_real t0, lsm_real t1, lsm_real *plo, lsm_real *phi)
+{
+    const lsm_real k2hi = lsm_max2(k0 * k0, k1 * k1);
+    const lsm_real k2lo = k0 * k1 <= R0 ? R0 : lsm_min2(k0 * k0, k1 * k1);
+    lsm_real alo = PI_R, ahi = PI_R;
+    if (c != R0) {
+        const lsm_real a1 = lsm_atan2(c, -k2lo), a2 = lsm_atan2(c, -k2hi);
+        alo = lsm_min2(a1, a2);
+        ahi = lsm_max2(a1, a2);
+    }
+    const lsm_real pad = PSI_SLACK_EPS * LSM_REAL_EPS * (R1 + PI_R + lsm_fabs(t0) + lsm_fabs(t1));
+    *plo = t0 + alo - pad;
+    *phi = t1 + ahi + pad;
+}
+
 /* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES; the caller zeroes them: the entries not written stay 0), the curvature
  * bound of the block and the bound of |q_sss| (the path's own third derivative: sqrt(c² + kappa⁴) on a clothoid,
  * kappa |w| on a helix, kappa² on a planar arc). */
@@ -59,6 +82,7 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
     lsm_real t0, t1, k, c = R0, sT = R1; /* sT: in-plane speed per unit s (helix) */
     lsm_real n[3] = {R0, R0, R0}, ax = R0;
     lsm_real q3n = R0, q3t; /* q3 = q3n mN + q3t mT */
+    lsm_real plo = R0, phi = R0; /* a clothoid's range of the direction of q_sss (clothoid_psi) */
     bool arc = false;
     if (g->kind == LSM_GEOM_ARC) {
         const lsm_geom_arc *a = &g->u.arc;
@@ -100,6 +124,9 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         q3n = lsm_fabs(c);
         q3t = k * k;
         *q3max = lsm_sqrt(c * c + k * k * k * k);
+        /* q_sss = c N - kappa² T = M (cos psi e1 + sin psi e2), M = sqrt(c² + kappa⁴), psi = theta + alpha, alpha =
+         * atan2(c, -kappa²) (monotone in kappa²): its range from those of theta and kappa² (clothoid_psi) */
+        clothoid_psi(k0, k0 + c * L, c, t0, t1, &plo, &phi);
     }
     /* one loop for both: an arc's q1 adds |n ax| (a clothoid's n and ax are 0, sT 1: + 0 and * 1 are exact), its q3
      * has no mN term (q3n = 0, + 0 exact) */
@@ -110,6 +137,8 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         q1[i] = sT * mT + lsm_fabs(n[i] * ax);
         q2[i] = k * mN;
         q3[i] = q3n * mN + q3t * mT;
+        if (!arc) /* a clothoid: the better of the magnitudes and the direction bound (both hold) */
+            q3[i] = lsm_min2(q3[i], *q3max * max_abs_cs(e1[i], e2[i], plo, phi));
     }
     *kmax = k;
 }

@@ -81,7 +81,7 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
     const lsm_real *e1, *e2;
     lsm_real t0, t1, k, c = R0, sT = R1; /* sT: in-plane speed per unit s (helix) */
     lsm_real n[3] = {R0, R0, R0}, ax = R0;
-    lsm_real q3n = R0, q3t; /* q3 = q3n mN + q3t mT */
+    lsm_real q3n = R0, q3t;      /* q3 = q3n mN + q3t mT */
     lsm_real plo = R0, phi = R0; /* a clothoid's range of the direction of q_sss (clothoid_psi) */
     bool arc = false;
     if (g->kind == LSM_GEOM_ARC) {

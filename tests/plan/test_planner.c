@@ -769,6 +769,10 @@ static void scenario(int kind, const char *name, int mode)
             if (r.held_motion != 0)
                 fail_msg("%s %ld: moved %.3g mm while held", name, c, r.held_motion);
         }
+        /* a replay case for test_override_restore (in soak logs: grep "applied later") */
+        if (r.ovr_later && r.ovr_retried)
+            print_message("%s %ld (seed %lu): an override change undone and applied later (%u later, %u applied)\n",
+                          name, c, g_seed, r.ovr_later, r.ovr_retried);
         underruns += r.underruns;
         tick_plans += r.tick_plans;
         prepared += r.prepared;

@@ -387,6 +387,11 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
         prev_orig = prev->g;
         push_corner(pl, prev, &ct, feed, mv->seq, flags);
     }
+    /* (the W the machine's commitment rests on, for a restore: taken only where one can happen, see below) */
+    const bool may_stop = has_prev && !(flags & LSM_PB_STOP);
+    lsm_pl_wseed seed;
+    if (may_stop)
+        lsm_pl_wseed_take(pl, &seed);
     push_block(pl, gp, feed, mv->seq, flags);
     set_tail(pl, gp, mv, prog_end, fr, fit_err);
     pl->gen++;
@@ -396,7 +401,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
     const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) ||
                         lsm_planner_piece_stale(pl) || !lsm_pl_commitment_kept(pl);
     /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
-    if (has_prev && !(flags & LSM_PB_STOP) && stales && !lsm_pl_horizon_feasible(pl, true)) {
+    if (may_stop && stales && !lsm_pl_horizon_feasible(pl, true)) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
          * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
         pl->tail -= corner ? 3u : 1u;
@@ -409,6 +414,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
         push_block(pl, g, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
         pl->stats.corner_stops++;
         pl->stats.horizon_stops++;
+        lsm_pl_wseed_put(pl, &seed); /* (the restoring pass starts from the W before the append: lsm_pl_wseed) */
         pl->full_pass = 1;
         lsm_pl_backward_pass(pl);
         if (!lsm_pl_commitment_ok(pl))

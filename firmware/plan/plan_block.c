@@ -354,6 +354,25 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     }
 }
 
+#ifdef LSM_TEST_OVR_UNDO
+/* Fault injection, in test builds only (tests/plan, test_planner_undo): the next lsm_test_hz_stop_left appends that may
+ * be made an exact stop at their junction are, as if the horizon check had failed, so that the restore runs on any
+ * path (the real case needs the interpolator just before a node whose W the append lowers). */
+extern unsigned lsm_test_hz_stop_left;
+static bool hz_stop_injected(void)
+{
+    if (lsm_test_hz_stop_left == 0u)
+        return false;
+    lsm_test_hz_stop_left--;
+    return true;
+}
+#else
+static bool hz_stop_injected(void)
+{
+    return false;
+}
+#endif
+
 /* Appends g (which starts at tail_pos), with corner handling at its start (the block pushed is then g trimmed, a copy:
  * g itself is left as it was). prog_end: its programmed end. */
 lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv,
@@ -401,7 +420,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
     const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) ||
                         lsm_planner_piece_stale(pl) || !lsm_pl_commitment_kept(pl);
     /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
-    if (may_stop && stales && !lsm_pl_horizon_feasible(pl, true)) {
+    if (may_stop && ((stales && !lsm_pl_horizon_feasible(pl, true)) || hz_stop_injected())) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
          * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
         pl->tail -= corner ? 3u : 1u;

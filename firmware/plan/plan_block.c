@@ -422,7 +422,8 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
     /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
     if (may_stop && ((stales && !lsm_pl_horizon_feasible(pl, true)) || hz_stop_injected())) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
-         * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
+         * on: the machine stops at the junction instead, which restores the previous plan (a stop there; the W the
+         * commitment rests on searched again from their values before the append: lsm_pl_wseed) */
         pl->tail -= corner ? 3u : 1u;
         lsm_pl_changed(pl, pl->tail - 1u);
         if (corner) {

@@ -283,7 +283,7 @@ static lsm_real min_cap_ahead(const lsm_planner *pl, uint32_t id, lsm_real d)
 {
     lsm_real m = cap_of(pl, id), x = blk(pl, id)->g.len;
     /* (not across an exact stop: what comes after one never moves the nodes before it, so that a junction made an
-     * exact stop restores the plan before it exactly) */
+     * exact stop restores the nodes before it; their W, lsm_pl_wseed) */
     for (uint32_t q = id + 1u; q != pl->tail && x < d && !(blk(pl, q)->flags & LSM_PB_STOP); q++) {
         m = lsm_min2(m, cap_of(pl, q));
         x += blk(pl, q)->g.len;

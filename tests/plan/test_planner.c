@@ -309,7 +309,7 @@ static void node_ws_take(const lsm_planner *pl, node_ws *s)
 }
 
 /* Nodes whose W an undone change lowered (b after a, by block id; both in id order): the restore puts the W back
- * (plan_nodes.c, ovr_seed), and a lower W after the current piece's end can strand the machine (seed 30028). */
+ * (planner_int.h, lsm_pl_wseed), and a lower W after the current piece's end can strand the machine (seed 30028). */
 static unsigned node_ws_lowered(const node_ws *a, const node_ws *b)
 {
     unsigned n = 0;
@@ -878,7 +878,7 @@ static void run_replay(const prog *p, const run_opts *o, long index, const char 
  * after new pieces. Every case must finish within every limit, end exactly, keep the commitment (check_run:
  * restore_unkept) and plan no piece in the cycle but as the scenario allows; the change is counted as undone
  * (ovr_later) and applied later by a retry unless a later change or the end of the program comes first; and the undo
- * lowers no node's W from the current piece's end on (node_ws_lowered: without ovr_seed's W put back, case 0 already
+ * lowers no node's W from the current piece's end on (node_ws_lowered: without the seed's W put back, case 0 already
  * fails, 73 of 866 undos of seed 1 count 300 in double; with it none). It found the retry of the step without
  * lsm_interp_prepare planning its piece from a switch point found before the change (interp.c, retry_override:
  * setpoint jumps and stalls in 1 of ~100 cases). */

@@ -10,6 +10,9 @@
 /* The coefficients are scaled up by this before rounding to bfloat16 (a bound, never smaller than the exact value,
  * even after the double -> float conversion). */
 #define BF16_PRE_SCALE ((lsm_real)1.000001)
+/* The direction range of a clothoid's q_sss (clothoid_psi) is widened by this many eps of the angles' size: the
+ * rounding of atan2 (a few ulp) and of the sums. */
+#define PSI_SLACK_EPS LSM_R(64.0)
 /* cap_geo is lowered by this many eps, so that the budget at the cap is never negative through rounding. */
 #define CAP_GEO_EPS LSM_R(4.0)
 /* Two lines are collinear when their unit directions differ by less than this (squared): rounding of dir only. */
@@ -43,6 +46,26 @@ static lsm_real max_abs_cs(lsm_real A, lsm_real B, lsm_real t0, lsm_real t1)
     return lsm_min2(R, m * (R1 + END_VALUE_SLACK) + LSM_REAL_EPS * R); /* rounding of the end values */
 }
 
+/* The range [*plo, *phi] of the direction psi of a clothoid's q_sss = c N - kappa² T in its plane (psi = theta +
+ * alpha, alpha = atan2(c, -kappa²)): theta over [t0, t1], kappa from k0 to k1 (kappa² from 0 where it changes sign).
+ * alpha is monotone in kappa² (from +-pi/2 at kappa = 0 towards +-pi), so its range is that of its ends; c = 0 gives
+ * alpha = pi (q_sss = -kappa² T). Widened by PSI_SLACK_EPS eps of the angles' size for the rounding of atan2 and of
+ * the sums. */
+static void clothoid_psi(lsm_real k0, lsm_real k1, lsm_real c, lsm_real t0, lsm_real t1, lsm_real *plo, lsm_real *phi)
+{
+    const lsm_real k2hi = lsm_max2(k0 * k0, k1 * k1);
+    const lsm_real k2lo = k0 * k1 <= R0 ? R0 : lsm_min2(k0 * k0, k1 * k1);
+    lsm_real alo = PI_R, ahi = PI_R;
+    if (c != R0) {
+        const lsm_real a1 = lsm_atan2(c, -k2lo), a2 = lsm_atan2(c, -k2hi);
+        alo = lsm_min2(a1, a2);
+        ahi = lsm_max2(a1, a2);
+    }
+    const lsm_real pad = PSI_SLACK_EPS * LSM_REAL_EPS * (R1 + PI_R + lsm_fabs(t0) + lsm_fabs(t1));
+    *plo = t0 + alo - pad;
+    *phi = t1 + ahi + pad;
+}
+
 /* Fills Q1, Q2, Q3 per axis (LSM_MAX_AXES; the caller zeroes them: the entries not written stay 0), the curvature
  * bound of the block and the bound of |q_sss| (the path's own third derivative: sqrt(c² + kappa⁴) on a clothoid,
  * kappa |w| on a helix, kappa² on a planar arc). */
@@ -58,7 +81,8 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
     const lsm_real *e1, *e2;
     lsm_real t0, t1, k, c = R0, sT = R1; /* sT: in-plane speed per unit s (helix) */
     lsm_real n[3] = {R0, R0, R0}, ax = R0;
-    lsm_real q3n = R0, q3t; /* q3 = q3n mN + q3t mT */
+    lsm_real q3n = R0, q3t;      /* q3 = q3n mN + q3t mT */
+    lsm_real plo = R0, phi = R0; /* a clothoid's range of the direction of q_sss (clothoid_psi) */
     bool arc = false;
     if (g->kind == LSM_GEOM_ARC) {
         const lsm_geom_arc *a = &g->u.arc;
@@ -100,6 +124,9 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         q3n = lsm_fabs(c);
         q3t = k * k;
         *q3max = lsm_sqrt(c * c + k * k * k * k);
+        /* q_sss = c N - kappa² T = M (cos psi e1 + sin psi e2), M = sqrt(c² + kappa⁴), psi = theta + alpha, alpha =
+         * atan2(c, -kappa²) (monotone in kappa²): its range from those of theta and kappa² (clothoid_psi) */
+        clothoid_psi(k0, k0 + c * L, c, t0, t1, &plo, &phi);
     }
     /* one loop for both: an arc's q1 adds |n ax| (a clothoid's n and ax are 0, sT 1: + 0 and * 1 are exact), its q3
      * has no mN term (q3n = 0, + 0 exact) */
@@ -110,6 +137,8 @@ static void geom_bounds(const lsm_geom *g, lsm_real q1[LSM_MAX_AXES], lsm_real q
         q1[i] = sT * mT + lsm_fabs(n[i] * ax);
         q2[i] = k * mN;
         q3[i] = q3n * mN + q3t * mT;
+        if (!arc) /* a clothoid: the better of the magnitudes and the direction bound (both hold) */
+            q3[i] = lsm_min2(q3[i], *q3max * max_abs_cs(e1[i], e2[i], plo, phi));
     }
     *kmax = k;
 }
@@ -325,6 +354,25 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
     }
 }
 
+#ifdef LSM_TEST_OVR_UNDO
+/* Fault injection, in test builds only (tests/plan, test_planner_undo): the next lsm_test_hz_stop_left appends that may
+ * be made an exact stop at their junction are, as if the horizon check had failed, so that the restore runs on any
+ * path (the real case needs the interpolator just before a node whose W the append lowers). */
+extern unsigned lsm_test_hz_stop_left;
+static bool hz_stop_injected(void)
+{
+    if (lsm_test_hz_stop_left == 0u)
+        return false;
+    lsm_test_hz_stop_left--;
+    return true;
+}
+#else
+static bool hz_stop_injected(void)
+{
+    return false;
+}
+#endif
+
 /* Appends g (which starts at tail_pos), with corner handling at its start (the block pushed is then g trimmed, a copy:
  * g itself is left as it was). prog_end: its programmed end. */
 lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move *mv,
@@ -358,6 +406,11 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
         prev_orig = prev->g;
         push_corner(pl, prev, &ct, feed, mv->seq, flags);
     }
+    /* (the W the machine's commitment rests on, for a restore: taken only where one can happen, see below) */
+    const bool may_stop = has_prev && !(flags & LSM_PB_STOP);
+    lsm_pl_wseed seed;
+    if (may_stop)
+        lsm_pl_wseed_take(pl, &seed);
     push_block(pl, gp, feed, mv->seq, flags);
     set_tail(pl, gp, mv, prog_end, fr, fit_err);
     pl->gen++;
@@ -367,9 +420,10 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
     const bool stales = (corner && pl->horizon_end == pl->tail - 3u && pl->horizon_v > R0) ||
                         lsm_planner_piece_stale(pl) || !lsm_pl_commitment_kept(pl);
     /* (while a new piece is due at the horizon, every append keeps it possible: the nodes ahead may change) */
-    if (has_prev && !(flags & LSM_PB_STOP) && stales && !lsm_pl_horizon_feasible(pl, true)) {
+    if (may_stop && ((stales && !lsm_pl_horizon_feasible(pl, true)) || hz_stop_injected())) {
         /* the new block (or the trim of its corner) took something the interpolator needs from its commitment
-         * on: the machine stops at the junction instead, which restores the previous plan (a stop there) */
+         * on: the machine stops at the junction instead, which restores the previous plan (a stop there; the W the
+         * commitment rests on searched again from their values before the append: lsm_pl_wseed) */
         pl->tail -= corner ? 3u : 1u;
         lsm_pl_changed(pl, pl->tail - 1u);
         if (corner) {
@@ -380,6 +434,7 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
         push_block(pl, g, feed, mv->seq, (uint8_t)(flags | LSM_PB_STOP));
         pl->stats.corner_stops++;
         pl->stats.horizon_stops++;
+        lsm_pl_wseed_put(pl, &seed); /* (the restoring pass starts from the W before the append: lsm_pl_wseed) */
         pl->full_pass = 1;
         lsm_pl_backward_pass(pl);
         if (!lsm_pl_commitment_ok(pl))

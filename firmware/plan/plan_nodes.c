@@ -22,9 +22,6 @@
 #define OVR_NEED_SCALE LSM_R(2.0)
 #define OVR_NEED_CYCLES LSM_R(4.0)
 #define OVR_TRIES 8
-/* Nodes whose W the restoring pass is seeded with (ovr_seed): the first links of the chain the interpolator's
- * commitment rests on, from the end of its current piece on (16 x 8 B of stack in the background). */
-#define OVR_SEED_NODES 16
 
 /* ------------------------------------------------------------------------------------------------------------ */
 /* distance probes (continuous ramps)                                                                           */
@@ -286,7 +283,7 @@ static lsm_real min_cap_ahead(const lsm_planner *pl, uint32_t id, lsm_real d)
 {
     lsm_real m = cap_of(pl, id), x = blk(pl, id)->g.len;
     /* (not across an exact stop: what comes after one never moves the nodes before it, so that a junction made an
-     * exact stop restores the plan before it exactly) */
+     * exact stop restores the nodes before it; their W, lsm_pl_wseed) */
     for (uint32_t q = id + 1u; q != pl->tail && x < d && !(blk(pl, q)->flags & LSM_PB_STOP); q++) {
         m = lsm_min2(m, cap_of(pl, q));
         x += blk(pl, q)->g.len;
@@ -423,25 +420,14 @@ static lsm_real ovr_need(const lsm_planner *pl, uint32_t cur, lsm_real v_now)
     return R0;
 }
 
-/* The W of the first nodes from the end of the interpolator's current piece on, as they were before an override change
- * was tried. A W is not a function of the caps alone: node_w starts from the node's previous W and feasibility is not
- * monotone in the speed, so a fresh pass with the old factors after the failed trials can find a lower W than the
- * one the machine is committed to (seed 30028: 4.7794 instead of 4.78458 mm/s at the node after the current piece's
- * end, from which that end speed, 5.01285 mm/s, could no longer go on, and the machine stood still). Put back as the
- * nodes' previous W before the restoring pass, each is found again where it is still verified against the node
- * after it. */
-typedef struct ovr_seed {
-    uint32_t n;
-    uint32_t id[OVR_SEED_NODES];
-    lsm_real w[OVR_SEED_NODES];
-} ovr_seed;
-
-static void ovr_seed_take(const lsm_planner *pl, ovr_seed *s)
+/* The W of the first nodes from the end of the interpolator's current piece on, as they were before a trial that may
+ * be undone (planner_int.h, lsm_pl_wseed). */
+void lsm_pl_wseed_take(const lsm_planner *pl, lsm_pl_wseed *s)
 {
     const uint32_t e = pl->horizon_end;
     s->n = 0;
     for (uint32_t id = id_lt(e, pl->head) || !id_lt(e, pl->tail) ? pl->head : e;
-         id != pl->tail && s->n < OVR_SEED_NODES; id++) {
+         id != pl->tail && s->n < LSM_PL_SEED_NODES; id++) {
         const lsm_pblock *b = blk(pl, id);
         if (b->flags & LSM_PB_NODE) {
             s->id[s->n] = id;
@@ -451,15 +437,23 @@ static void ovr_seed_take(const lsm_planner *pl, ovr_seed *s)
     }
 }
 
-/* Restores the override state (near, far, sw) with the seeded W as the nodes' first guesses; counts a restored plan
- * that still does not keep the commitment (stats.restore_unkept: should stay 0). */
-static void ovr_restore(lsm_planner *pl, const ovr_seed *s, lsm_real near, lsm_real far, uint32_t sw)
+/* Puts the seeded W back as the nodes' previous W (the restoring pass starts its searches from them). */
+void lsm_pl_wseed_put(lsm_planner *pl, const lsm_pl_wseed *s)
 {
     for (uint32_t i = 0; i < s->n; i++) {
+        if (id_lt(s->id[i], pl->head) || !id_lt(s->id[i], pl->tail))
+            continue; /* (a block no longer in the buffer: trimmed away by the restore) */
         lsm_pblock *b = blk(pl, s->id[i]);
         b->flags |= LSM_PB_NODE;
         b->w_mm_s = s->w[i];
     }
+}
+
+/* Restores the override state (near, far, sw) with the seeded W as the nodes' first guesses; counts a restored plan
+ * that still does not keep the commitment (stats.restore_unkept: should stay 0). */
+static void ovr_restore(lsm_planner *pl, const lsm_pl_wseed *s, lsm_real near, lsm_real far, uint32_t sw)
+{
+    lsm_pl_wseed_put(pl, s);
     ovr_apply(pl, near, far, sw);
     if (!lsm_pl_commitment_ok(pl))
         pl->stats.restore_unkept++;
@@ -493,7 +487,7 @@ static bool ovr_fail_injected(void)
  * machine could go on, and no piece at all was found there: the machine stood still, RUN at 6.5 mm/s, seed 22514).
  * At worst only the blocks appended later get f; if even that is not verified (an earlier switch still ahead of the
  * cursor: blocks beyond it back at `keep`), the previous state stays. */
-static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const ovr_seed *seed)
+static bool ovr_switch_search(lsm_planner *pl, lsm_real f, uint32_t cur, lsm_real v_now, const lsm_pl_wseed *seed)
 {
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
@@ -541,8 +535,8 @@ lsm_status lsm_planner_set_override(lsm_planner *pl, lsm_real f, uint32_t cur, l
     }
     const lsm_real near0 = pl->ovr_near, far0 = pl->ovr_far;
     const uint32_t sw0 = pl->ovr_switch;
-    ovr_seed seed;
-    ovr_seed_take(pl, &seed);
+    lsm_pl_wseed seed;
+    lsm_pl_wseed_take(pl, &seed);
     if (f >= ovr_of(pl, cur)) {
         /* an increase (no block from the cursor on has a higher factor: near >= far) at once, if the machine can go
          * on with it (else as a decrease, beyond a switch) */

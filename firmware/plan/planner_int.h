@@ -206,6 +206,25 @@ bool lsm_pl_arrival_ok(lsm_planner *pl, uint32_t id, lsm_real v);
 void lsm_pl_mark_stale(lsm_planner *pl);
 void lsm_pl_backward_pass(lsm_planner *pl);
 
+/* The W of the first nodes from the end of the interpolator's current piece on, as they were before a trial that may
+ * be undone: an override change (plan_nodes.c, lsm_planner_set_override) or an append whose junction is then made an
+ * exact stop (plan_block.c, lsm_pl_append_geom). A W is not a function of the caps alone: node_w starts from the
+ * node's previous W and feasibility is not monotone in the speed, so a fresh pass over the restored blocks after the
+ * trial can find a lower W than the one the machine is committed to. Override (seed 30028): 4.7794 instead of 4.78458
+ * mm/s at the node after the current piece's end, from which that end speed, 5.01285 mm/s, could no longer go on.
+ * Append (path soak, seed 82649, "underrun lines" case 7, with the clothoid direction bound): 18.0005 instead of
+ * 18.0714 mm/s at the end of the current piece itself, where the machine arrived at 18.0714 mm/s and no piece was
+ * found. Either way the machine stood still. Put back as the nodes' previous W before the restoring pass
+ * (lsm_pl_wseed_put), each is found again where it is still verified against the node after it. Background. */
+#define LSM_PL_SEED_NODES 16 /* the first links of the chain the commitment rests on (16 x 8 B of background stack) */
+typedef struct lsm_pl_wseed {
+    uint32_t n;
+    uint32_t id[LSM_PL_SEED_NODES];
+    lsm_real w[LSM_PL_SEED_NODES];
+} lsm_pl_wseed;
+void lsm_pl_wseed_take(const lsm_planner *pl, lsm_pl_wseed *s);
+void lsm_pl_wseed_put(lsm_planner *pl, const lsm_pl_wseed *s);
+
 /* The midpoint of a bisection over [lo, hi], or the first time the probe when it lies inside the bracket (the
  * bracket only narrows: a probe outside it stays outside, so it is used at most once). */
 static inline lsm_real probe_mid(lsm_real lo, lsm_real hi, lsm_real *probe)

@@ -222,6 +222,86 @@ static lsm_status append_one(lsm_planner *pl, uint64_t *st, double p[3])
     return s;
 }
 
+/* The coefficients of a curved block bound its geometric derivatives per axis at every point (exact, double): alpha_a
+ * |q_s,i| / A_i, beta_a |q_ss,i| / A_i, gamma_j |q_sss,i| / J_i (and with path limits the path's |q_ss|, |q_sss|).
+ * gamma_j of a clothoid is the better of the magnitudes |c| |N_i| + kappa² |T_i| and the direction bound of
+ * q_sss = c N - kappa² T (plan_block.c, clothoid_psi); this checks the latter where it is the tighter. */
+static void check_coef_bounds(const lsm_planner *pl, uint32_t id, long prog, long *tighter)
+{
+    const lsm_pblock *b = lsm_planner_block(pl, id);
+    const lsm_planner_config *cf = &pl->cfg;
+    coef c;
+    coef_get(b, &c);
+    for (int p = 0; p < 4 * POINTS_ALONG; p++) {
+        const double s = (double)b->g.len * p / (4 * POINTS_ALONG - 1);
+        double q1[3], q2[3], q3[3];
+        derivs(&b->g, s, q1, q2, q3);
+        double n2 = 0, n3 = 0;
+        for (int i = 0; i < 3; i++) {
+            const double A = (double)cf->axis[i].a_max, J = (double)cf->axis[i].j_max;
+            if (fabs(q1[i]) / A > (double)c.aa * (1.0 + SLACK) || fabs(q2[i]) / A > (double)c.ba * (1.0 + SLACK) ||
+                fabs(q3[i]) / J > (double)c.gj * (1.0 + SLACK))
+                fail_msg("program %ld: block kind %d len %.6g: axis %d |q_s| %.9g |q_ss| %.9g |q_sss| %.9g at s %.6g "
+                         "above the coefficients (alpha_a %.9g beta_a %.9g gamma_j %.9g)",
+                         prog, b->g.kind, (double)b->g.len, i, fabs(q1[i]), fabs(q2[i]), fabs(q3[i]), s,
+                         (double)c.aa * A, (double)c.ba * A, (double)c.gj * J);
+            n2 += q2[i] * q2[i];
+            n3 += q3[i] * q3[i];
+        }
+        if (cf->path_j_max_mm_s3 > 0 && sqrt(n3) / (double)cf->path_j_max_mm_s3 > (double)c.gj * (1.0 + SLACK))
+            fail_msg("program %ld: path |q_sss| %.9g above gamma_j", prog, sqrt(n3));
+        if (cf->path_a_max_mm_s2 > 0 && sqrt(n2) / (double)cf->path_a_max_mm_s2 > (double)c.ba * (1.0 + SLACK))
+            fail_msg("program %ld: path |q_ss| %.9g above beta_a", prog, sqrt(n2));
+    }
+    if (b->g.kind != LSM_GEOM_CLOTHOID)
+        return;
+    /* the magnitudes' bound |c| max|N_i| + kappa_max² max|T_i| (sampled: at most the bound itself) */
+    const lsm_geom_clothoid *cl = &b->g.u.clo;
+    const double k0 = (double)cl->kappa0_per_mm, cc = (double)cl->c_per_mm2, k1 = k0 + cc * (double)b->g.len;
+    const double k = fmax(fabs(k0), fabs(k1));
+    double mT[3] = {0, 0, 0}, mN[3] = {0, 0, 0};
+    for (int p = 0; p < 4 * POINTS_ALONG; p++) {
+        const double s = (double)b->g.len * p / (4 * POINTS_ALONG - 1);
+        const double th = (double)cl->theta0_rad + s * (k0 + 0.5 * cc * s);
+        for (int i = 0; i < 3; i++) {
+            mT[i] = fmax(mT[i], fabs(cos(th) * (double)cl->e1[i] + sin(th) * (double)cl->e2[i]));
+            mN[i] = fmax(mN[i], fabs(-sin(th) * (double)cl->e1[i] + cos(th) * (double)cl->e2[i]));
+        }
+    }
+    double mag = 0;
+    for (int i = 0; i < 3; i++)
+        mag = fmax(mag, (fabs(cc) * mN[i] + k * k * mT[i]) / (double)cf->axis[i].j_max);
+    if ((double)c.gj < 0.95 * mag)
+        (*tighter)++;
+}
+
+static void test_coef_bounds(void **state)
+{
+    (void)state;
+    static lsm_pblock store[CAP];
+    static lsm_planner pl;
+    long blocks = 0, tighter = 0;
+    for (long prog = 0; prog < g_count; prog++) {
+        uint64_t st;
+        assert_int_equal(test_random_planner(&pl, store, CAP, &st, g_seed, prog, 1u, 0.006), LSM_OK);
+        double p[3] = {0, 0, 0};
+        for (int n = 0; n < 24 && lsm_planner_free(&pl) > 6; n++)
+            (void)append_one(&pl, &st, p);
+        assert_int_equal(lsm_planner_flush(&pl), LSM_OK);
+        for (uint32_t id = pl.head; id != pl.tail; id++) {
+            const lsm_pblock *b = lsm_planner_block(&pl, id);
+            if (b->g.kind == LSM_GEOM_ARC || b->g.kind == LSM_GEOM_CLOTHOID) {
+                blocks++;
+                check_coef_bounds(&pl, id, prog, &tighter);
+            }
+        }
+    }
+    print_message("curved blocks %ld, clothoids whose gamma_j is below 0.95 of the magnitudes' bound (sampled) %ld\n",
+                  blocks, tighter);
+    assert_true(blocks > g_count);
+    assert_true(tighter * 20 > blocks); /* the direction bound decides on some clothoids (it is exercised) */
+}
+
 static void test_block_ratios_sound(void **state)
 {
     (void)state;
@@ -253,6 +333,7 @@ int main(int argc, char **argv)
     g_count = (long)test_arg_u(argc, argv, 2, 400);
     print_message("seed %lu, count %ld\n", g_seed, g_count);
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_coef_bounds),
         cmocka_unit_test(test_block_ratios_sound),
     };
     return test_seed_finish(argv[0], g_seed, (unsigned long long)g_count, cmocka_run_group_tests(tests, NULL, NULL));

@@ -6,8 +6,10 @@
 #   test_planner[_float] SEED N        12 x N random paths through the planner and interpolator (limits, deviation,
 #                                      exact end, no stall, no fallback)
 #   test_sim_fixstep SEED N            N moves on the integer-only evaluator against the double reference
-#   test_planner_undo[_float] SEED N   3 x N random override paths with the first switch search of each failed on
-#                                      purpose (undo, restore, retries; tests/plan/test_planner.c, --undo)
+#   test_planner_undo[_float] SEED N   5 x N random paths: 3 x N override paths with the first switch search of
+#                                      each failed on purpose (undo, restore, retries) and 2 x N slowly fed paths
+#                                      with every append while moving made an exact stop on purpose (restore;
+#                                      tests/plan/test_planner.c, --undo)
 # Usage: scripts/soak.sh [--vc N] [--moves N] [--paths N] [--fixstep N] [--undo N] [--jobs J] [--seed S]
 #                        [--only double|float]
 #   defaults: the issue's goal, --vc 10000000 --paths 1000000 --fixstep 1000000 (many CPU hours: pass smaller
@@ -37,7 +39,7 @@ VC_CHUNK=200000      # velocity changes per process (and 25 000 moves; about 20 
 MOVE_CHUNK=25000     # moves per process of --moves (about 15 s of CPU)
 PATH_CHUNK=120       # random paths per process (12 scenarios x 10; about 0.5 s of CPU)
 FIX_CHUNK=20000      # fixstep moves per process
-UNDO_CHUNK=120       # forced-undo paths per process (3 scenarios x 40; about 1.3 s of CPU)
+UNDO_CHUNK=120       # forced-undo and forced-stop paths per process (5 scenarios x 24; about 2 s of CPU)
 
 cmake --preset host >/dev/null || exit 1
 cmake --build build -j "$jobs" --target test_scurve_props test_scurve_props_float test_planner test_planner_float \
@@ -66,7 +68,7 @@ for v in "${variants[@]}"; do
   [ "$vc" -gt 0 ] && plan "test_scurve_props$v" "$vc" $VC_CHUNK 1
   [ "$moves" -gt 0 ] && plan "test_scurve_props$v" "$moves" $MOVE_CHUNK 1 moves
   [ "$paths" -gt 0 ] && plan "test_planner$v" "$paths" $PATH_CHUNK 12
-  [ "$undo" -gt 0 ] && plan "test_planner_undo$v" "$undo" $UNDO_CHUNK 3
+  [ "$undo" -gt 0 ] && plan "test_planner_undo$v" "$undo" $UNDO_CHUNK 5
 done
 [ "$fix" -gt 0 ] && [ "$only" != float ] && plan test_sim_fixstep "$fix" $FIX_CHUNK 1
 
@@ -91,7 +93,7 @@ npass=$(grep -c '^PASS' "$out/results.txt"); nfail=$(grep -c '^FAIL' "$out/resul
         echo "  $name: $c velocity changes and $m moves passed, $f failing chunks"
       else
         progs=$(cat "$out"/$p$v-*.log 2>/dev/null | grep -oE ": [0-9]+ programs" | grep -oE "[0-9]+" | awk '{s+=$1} END {print s+0}')
-        k=12; [ "$p" = test_planner_undo ] && k=3
+        k=12; [ "$p" = test_planner_undo ] && k=5
         echo "  $name: $progs random paths passed ($p: count $c x $k scenarios), $f failing chunks"
       fi
     done

@@ -215,7 +215,8 @@ void lsm_pl_backward_pass(lsm_planner *pl);
  * Append (path soak, seed 82649, "underrun lines" case 7, with the clothoid direction bound): 18.0005 instead of
  * 18.0714 mm/s at the end of the current piece itself, where the machine arrived at 18.0714 mm/s and no piece was
  * found. Either way the machine stood still. Put back as the nodes' previous W before the restoring pass
- * (lsm_pl_wseed_put), each is found again where it is still verified against the node after it. Background. */
+ * (lsm_pl_wseed_put), each is found again where it is still verified against the node after it. The nodes beyond the
+ * 16th are searched afresh and may come out lower (certified: a slower plan there). Background. */
 #define LSM_PL_SEED_NODES 16 /* the first links of the chain the commitment rests on (16 x 8 B of background stack) */
 typedef struct lsm_pl_wseed {
     uint32_t n;

@@ -327,8 +327,9 @@ static unsigned node_ws_lowered(const node_ws *a, const node_ws *b)
 }
 
 /* An append whose junction is made an exact stop on purpose (plan_block.c's fault injection) while the machine runs:
- * the restore must lower no node's W from the current piece's end on (planner_int.h, lsm_pl_wseed: without it the
- * restoring pass found a W below the machine's committed end speed, and it stood still: soak seed 82649). */
+ * the restore must lower the W of none of the first nodes from the current piece's end on (node_ws; planner_int.h,
+ * lsm_pl_wseed: without it the restoring pass found a W below the machine's committed end speed, and it stood still:
+ * soak seed 82649). */
 static lsm_status append_hz(lsm_planner *pl, const cmd *c, const run_opts *o, int running, run_res *r)
 {
     if (!o->hz_stops || !running)
@@ -927,7 +928,8 @@ static void test_override_undo(void **state)
 
 /* Appends while moving, each made an exact stop at its junction on purpose (plan_block.c's fault injection, as when the
  * horizon check fails): the restore leaves the machine a plan it can follow (within every limit, exact end, no
- * fallback, the commitment kept: check_run) and lowers no node's W from the current piece's end on. */
+ * fallback, the commitment kept: check_run) and lowers the W of none of the first 16 nodes from the current piece's
+ * end on (node_ws). */
 static void scenario_hz(int kind, const char *name)
 {
     uint64_t rs = rng(kind * 131 + 3);

@@ -361,10 +361,7 @@ static void set_tail(lsm_planner *pl, const lsm_geom *g, const lsm_planner_move 
 extern unsigned lsm_test_hz_stop_left;
 static bool hz_stop_injected(void)
 {
-    if (lsm_test_hz_stop_left == 0u)
-        return false;
-    lsm_test_hz_stop_left--;
-    return true;
+    return lsm_pl_fault_take(&lsm_test_hz_stop_left);
 }
 #else
 static bool hz_stop_injected(void)
@@ -402,15 +399,16 @@ lsm_status lsm_pl_append_geom(lsm_planner *pl, const lsm_geom *g, const lsm_plan
     const lsm_geom *gp = corner ? &ct.g2 : g; /* the block pushed */
     if ((flags & LSM_PB_STOP) && has_prev)
         pl->stats.corner_stops++;
-    if (corner) {
-        prev_orig = prev->g;
-        push_corner(pl, prev, &ct, feed, mv->seq, flags);
-    }
-    /* (the W the machine's commitment rests on, for a restore: taken only where one can happen, see below) */
+    /* (the W the machine's commitment rests on, before the append, for a restore: taken only where one can happen,
+     * see below) */
     const bool may_stop = has_prev && !(flags & LSM_PB_STOP);
     lsm_pl_wseed seed;
     if (may_stop)
         lsm_pl_wseed_take(pl, &seed);
+    if (corner) {
+        prev_orig = prev->g;
+        push_corner(pl, prev, &ct, feed, mv->seq, flags);
+    }
     push_block(pl, gp, feed, mv->seq, flags);
     set_tail(pl, gp, mv, prog_end, fr, fit_err);
     pl->gen++;

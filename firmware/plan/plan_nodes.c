@@ -440,9 +440,7 @@ void lsm_pl_wseed_take(const lsm_planner *pl, lsm_pl_wseed *s)
 /* Puts the seeded W back as the nodes' previous W (the restoring pass starts its searches from them). */
 void lsm_pl_wseed_put(lsm_planner *pl, const lsm_pl_wseed *s)
 {
-    for (uint32_t i = 0; i < s->n; i++) {
-        if (id_lt(s->id[i], pl->head) || !id_lt(s->id[i], pl->tail))
-            continue; /* (a block no longer in the buffer: trimmed away by the restore) */
+    for (uint32_t i = 0; i < s->n; i++) { /* (every id is in the buffer: nothing before the old tail is released) */
         lsm_pblock *b = blk(pl, s->id[i]);
         b->flags |= LSM_PB_NODE;
         b->w_mm_s = s->w[i];
@@ -467,10 +465,7 @@ static void ovr_restore(lsm_planner *pl, const lsm_pl_wseed *s, lsm_real near, l
 extern unsigned lsm_test_ovr_undo_left;
 static bool ovr_fail_injected(void)
 {
-    if (lsm_test_ovr_undo_left == 0u)
-        return false;
-    lsm_test_ovr_undo_left--;
-    return true;
+    return lsm_pl_fault_take(&lsm_test_ovr_undo_left);
 }
 #else
 static bool ovr_fail_injected(void)

@@ -226,6 +226,19 @@ typedef struct lsm_pl_wseed {
 void lsm_pl_wseed_take(const lsm_planner *pl, lsm_pl_wseed *s);
 void lsm_pl_wseed_put(lsm_planner *pl, const lsm_pl_wseed *s);
 
+/* Fault injection, in test builds only (tests/plan, test_planner_undo): true while *left > 0, counting it down. The
+ * hooks: plan_nodes.c ovr_fail_injected (override switch searches failed), plan_block.c hz_stop_injected (appends made
+ * exact stops); in other builds each is a constant false. */
+#ifdef LSM_TEST_OVR_UNDO
+static inline bool lsm_pl_fault_take(unsigned *left)
+{
+    if (*left == 0u)
+        return false;
+    (*left)--;
+    return true;
+}
+#endif
+
 /* The midpoint of a bisection over [lo, hi], or the first time the probe when it lies inside the bracket (the
  * bracket only narrows: a probe outside it stays outside, so it is used at most once). */
 static inline lsm_real probe_mid(lsm_real lo, lsm_real hi, lsm_real *probe)
